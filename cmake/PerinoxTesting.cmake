@@ -1,0 +1,43 @@
+# Test helpers. Every test is a GoogleTest executable (or a driver run) registered with CTest.
+#   perinox_add_gtest(NAME <name> SOURCES <files...> LIBS <libs...> [NP <n>] [LABELS <labels...>])
+# With NP the test runs under mpiexec with n ranks; running as root and oversubscribing the
+# 2-core machine are allowed here, in the registration, so nobody has to set them by hand.
+find_package(GTest REQUIRED)
+
+set(PERINOX_MPIEXEC_FLAGS --oversubscribe)
+set(PERINOX_TEST_ENV "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMPI_MCA_rmaps_base_oversubscribe=1")
+
+function(perinox_mpi_command out np)
+  set(${out} ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} ${PERINOX_MPIEXEC_FLAGS} PARENT_SCOPE)
+endfunction()
+
+function(perinox_add_gtest)
+  cmake_parse_arguments(T "" "NAME;NP;TIMEOUT" "SOURCES;LIBS;LABELS;NPS" ${ARGN})
+  add_executable(${T_NAME} ${T_SOURCES})
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  if(NOT T_NPS)
+    if(T_NP)
+      set(T_NPS ${T_NP})
+    else()
+      set(T_NPS 1)
+    endif()
+  endif()
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 600)
+  endif()
+  foreach(np ${T_NPS})
+    perinox_mpi_command(cmd ${np})
+    if(np EQUAL 1)
+      set(tname ${T_NAME})
+    else()
+      set(tname ${T_NAME}_np${np})
+    endif()
+    add_test(NAME ${tname} COMMAND ${cmd} $<TARGET_FILE:${T_NAME}>)
+    set(labels ${T_LABELS})
+    if(np GREATER 1)
+      list(APPEND labels mpi)
+    endif()
+    set_tests_properties(${tname} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}"
+      LABELS "${labels}" PROCESSORS ${np} TIMEOUT ${T_TIMEOUT})
+  endforeach()
+endfunction()

@@ -1,0 +1,306 @@
+#include "Simulation.hpp"
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Teuchos_XMLParameterListHelpers.hpp>
+#include <Thyra_VectorStdOps.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/io/Output.hpp"
+#include "perinox/solver/LinearSolver.hpp"
+#include "perinox/solver/NewtonSolver.hpp"
+
+namespace perinox {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// Mean displacement of a probe's particles, or the summed reaction, at state x.
+std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe,
+                               const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned) {
+  const int D = ev.problem().dim();
+  if (probe.quantity == "Reaction") return ev.reactionOn(x, probe.particles);
+  std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
+  for (int p : probe.particles)
+    if (p >= ev.firstOwned() && p < ev.endOwned()) {
+      for (int c = 0; c < D; ++c) s[c] += uOwned[(p - ev.firstOwned()) * D + c];
+      s[D] += 1;
+    }
+  Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, D + 1, s.data(), g.data());
+  std::vector<double> v(D);
+  for (int c = 0; c < D; ++c) v[c] = g[c] / g[D];
+  return v;
+}
+
+/// e_u = sum_i |u_i - u_ref,i| / |u_ref,i| V_i / sum_i V_i over real particles with u_ref != 0.
+double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref, const std::vector<double>& uOwned) {
+  const auto& d = ev.problem().disc;
+  const int D = ev.problem().dim();
+  double s[2] = {0, 0}, g[2] = {0, 0};
+  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    if (d.fictitious[p]) continue;
+    Eigen::VectorXd ur(D), u(D);
+    for (int c = 0; c < D; ++c) {
+      ur[c] = (ref.stretch - 1.0) * (d.X[p][c] - ref.center[c]);
+      u[c] = uOwned[(p - ev.firstOwned()) * D + c];
+    }
+    if (ur.norm() <= 1e-14 * d.dx) continue;
+    s[0] += (u - ur).norm() / ur.norm() * d.volume[p];
+    s[1] += d.volume[p];
+  }
+  Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, 2, s, g);
+  return g[1] > 0 ? g[0] / g[1] : 0.0;
+}
+
+void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x, const std::string& dir,
+                 bool vtk, int rank, int nranks) {
+  const auto& d = ev.problem().disc;
+  const int D = ev.problem().dim();
+  const auto u = ev.ownedDisplacements(x);
+  const auto outs = ev.ownedOutputs(x);
+  const long long b = ev.firstOwned(), e = ev.endOwned();
+  const std::size_t n = static_cast<std::size_t>(e - b);
+  std::vector<Eigen::Vector3d> pts(n);
+  PointField disp{"displacement", 3, std::vector<double>(3 * n, 0.0)};
+  PointField stress{"cauchy_stress", 9, std::vector<double>(9 * n, 0.0)};
+  PointField fict{"fictitious", 1, std::vector<double>(n, 0.0)};
+  PointField rk{"rank", 1, std::vector<double>(n, static_cast<double>(rank))};
+  std::ostringstream csv;
+  csv << std::setprecision(12);
+  for (std::size_t i = 0; i < n; ++i) {
+    const long long p = b + static_cast<long long>(i);
+    pts[i] = d.X[p];
+    for (int c = 0; c < D; ++c) disp.values[3 * i + c] = u[i * D + c];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) stress.values[9 * i + 3 * r + c] = outs[i].cauchy(r, c);
+    fict.values[i] = d.fictitious[p];
+    csv << p << ',' << d.X[p][0] << ',' << d.X[p][1] << ',' << d.X[p][2] << ',' << disp.values[3 * i] << ','
+        << disp.values[3 * i + 1] << ',' << disp.values[3 * i + 2] << ',' << outs[i].cauchy(0, 0) << ','
+        << outs[i].cauchy(1, 1) << ',' << outs[i].cauchy(2, 2) << ',' << outs[i].cauchy(0, 1) << ','
+        << static_cast<int>(d.fictitious[p]) << '\n';
+  }
+  const std::vector<PointField> fields{disp, stress, fict, rk};
+  if (vtk) {
+    const std::string piece = "fields_" + std::to_string(rank) + ".vtu";
+    writeVtu(dir + "/" + piece, pts, fields);
+    if (rank == 0) {
+      std::vector<std::string> pieces;
+      for (int r = 0; r < nranks; ++r) pieces.push_back("fields_" + std::to_string(r) + ".vtu");
+      writePvtu(dir + "/fields.pvtu", pieces, fields);
+    }
+  }
+  writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", csv.str());
+}
+
+}  // namespace
+
+RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                   const RunOptions& options) {
+  const double t0 = now();
+  const int rank = comm->getRank(), nranks = comm->getSize();
+  RunResult res;
+  res.outputDir = options.outputDir;
+
+  // Everything that can reject the set-up happens before the output folder exists.
+  auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
+  auto lows = buildLinearSolverFactory(Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver)), nranks);
+  evaluator->set_W_factory(lows);
+  res.particles = scene.problem->disc.size();
+  res.dofs = evaluator->numFreeDofs();
+
+  const std::string staging = options.outputDir + ".partial";
+  if (rank == 0) {
+    fs::remove_all(staging);
+    fs::create_directories(staging);
+    Teuchos::writeParameterListToXmlFile(*scene.resolved, staging + "/scene.resolved.xml");
+  }
+  comm->barrier();
+
+  NewtonOptions nopt;
+  nopt.tolerance = scene.solver.tolerance;
+  nopt.maxIterations = scene.solver.maxIterations;
+  nopt.lineSearch = scene.solver.lineSearch;
+  nopt.verbosity = scene.solver.verbosity;
+  NewtonSolver newton(evaluator, nopt);
+
+  auto x = Thyra::createMember(evaluator->get_x_space());
+  Thyra::assign(x.ptr(), 0.0);
+  auto xConverged = x->clone_v();
+
+  res.probes.resize(scene.probes.size());
+  for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
+
+  const int N = scene.solver.loadSteps;
+  double lambda = 0.0;
+  double increment = 1.0 / N;
+  int step = 0;
+  bool ok = true;
+  if (rank == 0 && !options.quiet)
+    std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
+              << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << "\n";
+  while (lambda < 1.0 - 1e-12) {
+    ++step;
+    const double tStep = now();
+    StepRecord rec;
+    rec.step = step;
+    NewtonResult nr;
+    int cut = 0;
+    for (;;) {
+      const double target = std::min(1.0, lambda + increment);
+      evaluator->setLoadFactor(target);
+      nr = newton.solve(*x);
+      rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
+      if (nr.converged) {
+        lambda = target;
+        break;
+      }
+      Thyra::copy(*xConverged, x.ptr());
+      if (cut >= scene.solver.maxCutbacks) break;
+      ++cut;
+      increment *= 0.5;
+      rec.residuals.clear();
+      if (rank == 0 && !options.quiet)
+        std::cout << "  step " << step << ": " << nr.failure << "; cutting the load increment to "
+                  << increment << "\n";
+    }
+    rec.cutbacks = cut;
+    rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
+    rec.newtonIterations = nr.iterations;
+    rec.reactionNormalised = nr.reactionNormalised;
+    rec.elapsed = now() - tStep;
+    if (!nr.converged) rec.residuals = nr.residuals;
+    res.steps.push_back(rec);
+    if (!nr.converged) {
+      ok = false;
+      std::ostringstream s;
+      s << "load step " << step << " (load factor " << rec.loadFactor << ") failed after " << cut
+        << " cut-back(s): " << nr.failure;
+      res.failure = s.str();
+      evaluator->setLoadFactor(lambda);
+      break;
+    }
+    Thyra::copy(*x, xConverged.ptr());
+    const auto u = evaluator->ownedDisplacements(*x);
+    for (std::size_t k = 0; k < scene.probes.size(); ++k)
+      res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
+    if (rank == 0 && !options.quiet)
+      std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
+                << "  newton " << std::setw(2) << nr.iterations << "  |R|/" << (nr.reactionNormalised ? "|reaction|" : "|f_ext|")
+                << " " << std::scientific << std::setprecision(3) << (nr.residuals.empty() ? 0.0 : nr.residuals.back())
+                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << "\n";
+    // After easy convergence at a reduced increment, grow back toward the nominal increment.
+    if (increment < 1.0 / N && nr.iterations <= 6) increment = std::min(1.0 / N, 2 * increment);
+  }
+  res.converged = ok;
+
+  // Output of the last converged state.
+  const auto u = evaluator->ownedDisplacements(*xConverged);
+  if (scene.reference.type != "None") {
+    res.hasError = true;
+    res.errorU = displacementError(*evaluator, scene.reference, u);
+  }
+  writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks);
+  res.wallTime = now() - t0;
+  comm->barrier();
+
+  if (rank == 0) {
+    // Gather per-rank particle CSVs into one file for plotting.
+    {
+      std::ofstream all(staging + "/fields.csv");
+      all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious\n";
+      for (int r = 0; r < nranks; ++r) {
+        const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
+        std::ifstream in(part);
+        all << in.rdbuf();
+        in.close();
+        fs::remove(part);
+      }
+    }
+    using nlohmann::json;
+    json j;
+    j["scene"] = scene.file;
+    j["title"] = scene.title;
+    j["ranks"] = nranks;
+    j["particles"] = res.particles;
+    j["dofs"] = res.dofs;
+    j["converged"] = res.converged;
+    if (!res.converged) j["failure"] = res.failure;
+    j["wall_time_s"] = res.wallTime;
+    j["effects"] = evaluator->model().effectNames();
+    j["linear_solver"] = scene.solver.linearSolverName;
+    j["tolerance"] = scene.solver.tolerance;
+    json steps = json::array();
+    std::ostringstream csv;
+    csv << std::setprecision(6) << std::scientific << "step,iteration,residual\n";
+    for (const auto& s : res.steps) {
+      steps.push_back({{"step", s.step},
+                       {"load_factor", s.loadFactor},
+                       {"newton_iterations", s.newtonIterations},
+                       {"residuals", s.residuals},
+                       {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
+                       {"cutbacks", s.cutbacks},
+                       {"time_s", s.elapsed}});
+      for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
+    }
+    j["steps"] = steps;
+    json probes = json::object();
+    for (std::size_t k = 0; k < res.probes.size(); ++k) {
+      json list = json::array();
+      const std::string key = scene.probes[k].quantity == "Reaction" ? "reaction" : "displacement";
+      for (const auto& [lf, v] : res.probes[k].second) list.push_back({{"load_factor", lf}, {key, v}});
+      probes[res.probes[k].first] = list;
+    }
+    j["probes"] = probes;
+    if (res.hasError) j["errors"] = {{"e_u", res.errorU}, {"reference", scene.reference.type}, {"stretch", scene.reference.stretch}};
+    writeFileAtomic(staging + "/summary.json", j.dump(2) + "\n");
+    writeFileAtomic(staging + "/newton.csv", csv.str());
+
+    // The residual table of seed 000's Tables 2-4: one column per step, one row per iteration.
+    if (!options.quiet) {
+      std::size_t rows = 0;
+      for (const auto& s : res.steps) rows = std::max(rows, s.residuals.size());
+      std::cout << "\nNewton residuals (normalised) per load step:\n   iter";
+      for (const auto& s : res.steps) std::cout << std::setw(11) << ("step " + std::to_string(s.step));
+      std::cout << "\n";
+      for (std::size_t it = 0; it < rows; ++it) {
+        std::cout << std::setw(7) << it;
+        for (const auto& s : res.steps) {
+          if (it < s.residuals.size())
+            std::cout << std::setw(11) << std::scientific << std::setprecision(3) << s.residuals[it];
+          else
+            std::cout << std::setw(11) << "-";
+        }
+        std::cout << std::defaultfloat << "\n";
+      }
+    }
+    if (scene.output.plots && !options.plotScript.empty()) {
+      const std::string cmd = "python3 '" + options.plotScript + "' '" + staging + "' > '" + staging + "/plot.log' 2>&1";
+      if (std::system(cmd.c_str()) != 0 && !options.quiet)
+        std::cout << "note: plots were not drawn (see plot.log; python3-matplotlib missing?)\n";
+    }
+    fs::remove_all(options.outputDir);
+    fs::rename(staging, options.outputDir);
+    if (!options.quiet) {
+      if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
+      std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
+                << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)" << std::defaultfloat << "\n";
+    }
+  }
+  comm->barrier();
+  return res;
+}
+
+}  // namespace perinox

@@ -1,0 +1,48 @@
+#pragma once
+// One run of a scene: load stepping around Newton, probes, errors against a reference, and
+// the output folder (summary.json, newton.csv, VTK, plots). The folder is staged and renamed
+// into place at the end, so a run never leaves a half-written result.
+#include <Teuchos_Comm.hpp>
+#include <Teuchos_RCP.hpp>
+#include <string>
+#include <vector>
+
+#include "perinox/io/Scene.hpp"
+
+namespace perinox {
+
+struct StepRecord {
+  int step = 0;
+  double loadFactor = 0;
+  int newtonIterations = 0;
+  std::vector<double> residuals;
+  bool reactionNormalised = false;
+  int cutbacks = 0;
+  double elapsed = 0;
+};
+
+struct RunResult {
+  bool converged = false;
+  std::string failure;
+  std::vector<StepRecord> steps;
+  // probe name -> per converged step: load factor and values (displacement or reaction)
+  std::vector<std::pair<std::string, std::vector<std::pair<double, std::vector<double>>>>> probes;
+  bool hasError = false;
+  double errorU = 0;   // e_u of seed 000 eq. 56 at the final state
+  double wallTime = 0;
+  long long particles = 0, dofs = 0;
+  std::string outputDir;
+};
+
+struct RunOptions {
+  std::string outputDir = "out";
+  bool quiet = false;       // no progress lines
+  std::string plotScript;   // python script that draws PNGs from the output folder ("" = none)
+};
+
+/// Runs the scene on comm. Throws SceneError / std::invalid_argument for set-up problems
+/// found before any output is written; solver failures are reported in the result.
+RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                   const RunOptions& options);
+
+}  // namespace perinox

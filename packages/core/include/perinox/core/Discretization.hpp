@@ -1,0 +1,90 @@
+#pragma once
+// Particle discretisation: positions, volumes, fictitious (Dirichlet) layers, families.
+// Plain C++ and Eigen only. The whole discretisation is built identically on every MPI rank
+// (it is deterministic and cheap next to the solve); the evaluator decides ownership.
+#include <Eigen/Dense>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace perinox {
+
+using Vec3 = Eigen::Vector3d;
+
+/// Sides of the lattice's bounding box. Bit i of a side mask is Side(i).
+enum class Side : int { XMin = 0, XMax = 1, YMin = 2, YMax = 3, ZMin = 4, ZMax = 5 };
+const char* sideName(Side s);                // "xmin", ...
+bool parseSide(const std::string& name, Side& out);  // case-insensitive; false if unknown
+
+/// A hole cut out of the real particles of a lattice (fictitious particles are never cut).
+struct Hole {
+  enum class Kind { Circle, Rectangle } kind = Kind::Circle;
+  Vec3 center = Vec3::Zero();
+  double radius = 0.0;                  // Circle (2D: disc; 3D: cylinder along z; 1D: interval)
+  Vec3 halfWidths = Vec3::Zero();       // Rectangle / box: half extents per axis
+};
+
+/// A regular lattice: particles at cell centres of a box split into counts[a] equal cells
+/// per axis a < dim. All axes must have the same spacing dx (relative tolerance 1e-9).
+struct LatticeSpec {
+  int dim = 2;
+  Vec3 lower = Vec3::Zero();
+  Vec3 upper = Vec3::Ones();
+  std::array<int, 3> counts{{1, 1, 1}};
+  double thickness = 1.0;               // 2D: out-of-plane thickness h; 1D: cross-section area A
+  std::vector<Hole> holes;
+  std::vector<Side> fictitiousSides;    // a layer of floor(delta/dx + 1e-9) particle rows outside each
+  double horizonFactor = 3.015;         // delta = horizonFactor * dx
+  double jitter = 0.0;                  // optional random shift of real particles, fraction of dx
+  unsigned jitterSeed = 12345;
+};
+
+/// Everything the model needs about particles. Index = global particle id (0..n-1).
+struct Discretization {
+  int dim = 2;
+  double dx = 0.0;                      // nominal spacing (lattice spacing, or given for files)
+  double horizon = 0.0;                 // delta
+  double thickness = 1.0;
+  std::vector<Vec3> X;                  // reference positions (unused components are 0)
+  std::vector<double> volume;           // particle volumes V_i (2D: dx^2 h, 1D: dx A, 3D: dx^3)
+  std::vector<std::uint8_t> fictitious; // 1 for particles of a fictitious Dirichlet layer
+  std::vector<std::uint8_t> sideMask;   // fictitious particles: bit s set when inside the layer of Side(s)
+  std::vector<int> block;               // block id (lattice: 1; files: the optional 5th column, else 1)
+  // Families in CSR form: neighbours of i are familyIndex[familyOffset[i] .. familyOffset[i+1]).
+  // Family of i = all j != i with |X_j - X_i| <= delta * (1 + 1e-12), sorted by j.
+  std::vector<std::int64_t> familyOffset;
+  std::vector<int> familyIndex;
+  Vec3 boxLower = Vec3::Zero(), boxUpper = Vec3::Zero();  // the real body's bounding box
+
+  int size() const { return static_cast<int>(X.size()); }
+  int familySize(int i) const { return static_cast<int>(familyOffset[i + 1] - familyOffset[i]); }
+};
+
+/// Builds the lattice (real + fictitious particles) and its families.
+/// Throws std::invalid_argument with a sentence naming the problem (unequal spacing, a
+/// horizon below the spacing, no particle left after holes, ...).
+Discretization buildLattice(const LatticeSpec& spec);
+
+/// Reads a particle file: one particle per line "x y z volume [block]", '#' starts a comment,
+/// blank lines ignored. dim selects how many coordinates matter (the rest must still be present
+/// as columns x y z). dx is the nominal spacing (used for reports and horizon factors).
+/// Throws std::runtime_error naming the file and line on malformed input.
+Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
+                                double thickness);
+
+/// (Re)builds the families of d with a cell-list neighbour search, O(n * family size).
+void buildFamilies(Discretization& d);
+
+/// Region selection helpers. Each returns sorted particle ids.
+enum class Population { Real, Fictitious, All };
+std::vector<int> selectBox(const Discretization& d, const Vec3& lo, const Vec3& hi, Population who);
+/// Real particles whose distance to side s of the real body's box is below `thickness`
+/// (e.g. thickness = dx selects the outermost particle row inside the body).
+std::vector<int> selectSideLayer(const Discretization& d, Side s, double thickness);
+/// Fictitious particles in the layer of side s.
+std::vector<int> selectFictitiousSide(const Discretization& d, Side s);
+/// The particle (of the population) nearest to p; ties go to the lowest id. -1 if none.
+int selectNearest(const Discretization& d, const Vec3& p, Population who);
+
+}  // namespace perinox

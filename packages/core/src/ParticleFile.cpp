@@ -1,0 +1,108 @@
+// Particle files: one particle per line, "x y z volume [block]"; '#' starts a comment.
+#include "perinox/core/Discretization.hpp"
+
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace perinox {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, long line, const std::string& what) {
+  throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
+}
+
+/// Parses a whole token as a double; false on trailing garbage ("1.0x") or no number at all.
+/// Overflow ("1e999") parses to +-inf and is rejected later as non-finite.
+bool parseDouble(const std::string& tok, double& out) {
+  const char* s = tok.c_str();
+  char* endp = nullptr;
+  out = std::strtod(s, &endp);
+  return endp != s && *endp == '\0';
+}
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
+                                double thickness) {
+  if (dim < 1 || dim > 3)
+    fail(path, 0, "dimension must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
+  if (!(horizon > 0.0) || !std::isfinite(horizon))
+    fail(path, 0, "horizon must be positive and finite (got " + num(horizon) + ")");
+  if (!(dx > 0.0) || !std::isfinite(dx))
+    fail(path, 0, "nominal spacing dx must be positive and finite (got " + num(dx) + ")");
+  if (!(thickness > 0.0) || !std::isfinite(thickness))
+    fail(path, 0, "thickness must be positive and finite (got " + num(thickness) + ")");
+
+  std::ifstream in(path);
+  if (!in) fail(path, 0, "cannot open particle file for reading");
+
+  Discretization d;
+  d.dim = dim;
+  d.dx = dx;
+  d.horizon = horizon;
+  d.thickness = thickness;
+
+  std::string text, tok;
+  long lineNo = 0;
+  while (std::getline(in, text)) {
+    ++lineNo;
+    const std::size_t hash = text.find('#');
+    if (hash != std::string::npos) text.erase(hash);
+    std::istringstream ls(text);
+    double v[5];
+    int n = 0;
+    while (ls >> tok) {
+      if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
+      if (!parseDouble(tok, v[n]))
+        fail(path, lineNo, "'" + tok + "' is not a number (expected \"x y z volume [block]\")");
+      if (!std::isfinite(v[n])) fail(path, lineNo, "'" + tok + "' is not a finite number");
+      ++n;
+    }
+    if (n == 0) continue;  // blank or comment-only line
+    if (n < 4)
+      fail(path, lineNo, "expected at least 4 numbers \"x y z volume [block]\", found " +
+                             std::to_string(n));
+    if (!(v[3] > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(v[3]) + ")");
+    int blk = 1;
+    if (n == 5) {
+      // Accept "2" and "2.0" but not "2.5": block ids are integers.
+      if (v[4] != std::floor(v[4]) || std::abs(v[4]) > INT_MAX)
+        fail(path, lineNo, "block id must be an integer (got " + num(v[4]) + ")");
+      blk = static_cast<int>(v[4]);
+    }
+    Vec3 x = Vec3::Zero();  // unused axes are present in the file but forced to 0
+    for (int a = 0; a < dim; ++a) x[a] = v[a];
+    d.X.push_back(x);
+    d.volume.push_back(v[3]);
+    d.block.push_back(blk);
+  }
+  if (in.bad()) fail(path, lineNo, "read error");
+  if (d.X.empty()) fail(path, lineNo, "no particles in file");
+
+  const std::size_t n = d.X.size();
+  d.fictitious.assign(n, 0);
+  d.sideMask.assign(n, 0);
+  d.boxLower = d.X[0];
+  d.boxUpper = d.X[0];
+  for (const Vec3& x : d.X) {
+    d.boxLower = d.boxLower.cwiseMin(x);
+    d.boxUpper = d.boxUpper.cwiseMax(x);
+  }
+  buildFamilies(d);
+  return d;
+}
+
+}  // namespace perinox

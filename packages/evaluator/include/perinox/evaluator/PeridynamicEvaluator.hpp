@@ -1,0 +1,106 @@
+#pragma once
+// Thyra::ModelEvaluator for quasi-static peridynamics over Tpetra:
+//   x = free displacement DOFs of the particles this rank owns,
+//   f(x) = f_int(u(x, lambda)) - lambda f_ext,   W = df/dx assembled (symmetric where the physics is).
+// Prescribed DOFs (fictitious layers, pins, rollers) are not unknowns; their values are
+// lambda * prescribed. Ghost displacements arrive through a Tpetra Import; element residuals
+// and tangents of owned particles are summed into an overlapping vector / matrix and moved to
+// their owners with an Export (ADD).
+#include <Teuchos_Comm.hpp>
+#include <Teuchos_RCP.hpp>
+#include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_StateFuncModelEvaluatorBase.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Export.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_Map.hpp>
+#include <Tpetra_Vector.hpp>
+#include <memory>
+
+#include "perinox/evaluator/Problem.hpp"
+
+namespace perinox {
+
+using LO = int;
+using GO = long long;
+using TMap = Tpetra::Map<LO, GO>;
+using TVector = Tpetra::Vector<double, LO, GO>;
+using TCrsGraph = Tpetra::CrsGraph<LO, GO>;
+using TCrsMatrix = Tpetra::CrsMatrix<double, LO, GO>;
+
+class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
+ public:
+  PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
+                       std::shared_ptr<const ProblemSpec> problem);
+
+  // --- loading ---
+  void setLoadFactor(double lambda) { lambda_ = lambda; }
+  double loadFactor() const { return lambda_; }
+
+  // --- Thyra ---
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_x_space() const override { return xSpace_; }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_f_space() const override { return xSpace_; }
+  Thyra::ModelEvaluatorBase::InArgs<double> getNominalValues() const override;
+  Teuchos::RCP<Thyra::LinearOpBase<double>> create_W_op() const override;
+  Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> get_W_factory() const override {
+    return wFactory_;
+  }
+  void set_W_factory(Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> f) { wFactory_ = f; }
+  Thyra::ModelEvaluatorBase::InArgs<double> createInArgs() const override;
+
+  // --- diagnostics and output ---
+  /// |lambda f_ext|_2 over free DOFs (global).
+  double externalForceNorm() const;
+  /// |reaction|_2: the internal force summed on prescribed DOFs at x (global).
+  double reactionNorm(const Thyra::VectorBase<double>& x) const;
+  /// Displacements of all owned particles (owned * dim, interleaved) for the state x.
+  std::vector<double> ownedDisplacements(const Thyra::VectorBase<double>& x) const;
+  /// Per-owned-particle F and Cauchy stress at x.
+  std::vector<ParticleOutput> ownedOutputs(const Thyra::VectorBase<double>& x) const;
+  /// The reaction force (sum of internal forces over prescribed DOFs of the given particles),
+  /// global, per component.
+  std::vector<double> reactionOn(const Thyra::VectorBase<double>& x, const std::vector<int>& particles) const;
+
+  const ProblemSpec& problem() const { return *problem_; }
+  const Model& model() const { return *model_; }
+  long long firstOwned() const { return begin_; }
+  long long endOwned() const { return end_; }
+  long long numFreeDofs() const { return numFree_; }
+  Teuchos::RCP<const TMap> ownedFreeMap() const { return ownedFree_; }
+  Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
+  /// Global free DOF id of (particle, component), or -1 if prescribed.
+  long long freeDof(long long p, int c) const { return freeId_[p * problem_->dim() + c]; }
+
+ private:
+  Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
+  void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
+                     const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;
+
+  /// Local displacements (local particles * dim) for the state x at the current load factor.
+  std::vector<double> localDisplacements(const Thyra::VectorBase<double>& x) const;
+  /// Owned-all internal force vector (owned particles * dim) at x.
+  Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W) const;
+  void buildMapsAndGraphs();
+
+  Teuchos::RCP<const Teuchos::Comm<int>> comm_;
+  std::shared_ptr<const ProblemSpec> problem_;
+  std::unique_ptr<Model> model_;
+  long long begin_ = 0, end_ = 0;
+  double lambda_ = 0.0;
+  long long numFree_ = 0;
+  std::vector<long long> freeId_;       // replicated: (particle*dim + c) -> free id or -1
+  std::vector<int> overlapFreeLid_;     // local (particle*dim + c) -> overlapFree lid or -1
+
+  Teuchos::RCP<const TMap> ownedFree_, overlapFree_, ownedAll_, overlapAll_;
+  Teuchos::RCP<Tpetra::Import<LO, GO>> allImport_;
+  Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_, freeExport_;
+  Teuchos::RCP<TCrsGraph> ownedGraph_, overlapGraph_;
+  mutable Teuchos::RCP<TCrsMatrix> overlapMatrix_;
+  Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
+
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_;
+  Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> wFactory_;
+  Thyra::ModelEvaluatorBase::InArgs<double> nominal_;
+};
+
+}  // namespace perinox

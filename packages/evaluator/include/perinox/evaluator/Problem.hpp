@@ -1,0 +1,30 @@
+#pragma once
+// A complete, validated problem description, free of Trilinos types: the discretisation
+// (replicated on every rank), the material, the effects a scene enables, and the loading.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "perinox/core/Discretization.hpp"
+#include "perinox/material/Material.hpp"
+#include "perinox/model/Model.hpp"
+
+namespace perinox {
+
+struct ProblemSpec {
+  Discretization disc;
+  MaterialSpec material;
+  bool correspondence = true;
+  bool stabilization = false;
+  StabilizationSpec stab;
+  // Loading at load factor 1 (scaled by the load factor lambda):
+  std::vector<std::uint8_t> fixedMask;  // per particle: bit c set when component c is prescribed
+  std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1
+  std::vector<double> bodyForce;        // per particle * dim: body force density at lambda = 1
+
+  int dim() const { return disc.dim; }
+  bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }
+};
+
+}  // namespace perinox

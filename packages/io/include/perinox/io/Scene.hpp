@@ -1,0 +1,76 @@
+#pragma once
+// Scene files: a Teuchos XML parameter list describing one problem. This module validates a
+// scene completely before any work (unknown keys, wrong types, malformed numbers, impossible
+// values, references to undefined regions, no constraint against rigid motion) and turns it
+// into a ProblemSpec plus solver, probe and output settings.
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_RCP.hpp>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "perinox/evaluator/Problem.hpp"
+
+namespace perinox {
+
+/// A problem with the input: the message names the file and the key.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ProbeDef {
+  std::string name;
+  std::string quantity;          // "Displacement" (mean over the region) or "Reaction" (sum)
+  std::vector<int> particles;
+};
+
+struct ReferenceDef {
+  std::string type = "None";     // "None", "Hydrostatic Hencky", "Uniform Stretch"
+  double stretch = 1.0;          // x = l / l0 of the analytic solution
+  Vec3 center = Vec3::Zero();
+};
+
+struct SolverSettings {
+  std::string method = "Newton";     // "Newton"
+  int loadSteps = 10;
+  double tolerance = 1e-10;
+  int maxIterations = 25;
+  std::string lineSearch = "Full Step";
+  int maxCutbacks = 4;
+  int verbosity = 0;
+  Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
+  std::string linearSolverName;                       // preset name or "custom"
+};
+
+struct OutputSettings {
+  bool vtk = true;
+  bool plots = true;
+};
+
+struct Scene {
+  std::string file;
+  std::string title;
+  std::shared_ptr<ProblemSpec> problem;
+  std::map<std::string, std::vector<int>> regions;
+  std::vector<ProbeDef> probes;
+  ReferenceDef reference;
+  SolverSettings solver;
+  OutputSettings output;
+  Teuchos::RCP<Teuchos::ParameterList> resolved;  // the scene with every default filled in
+};
+
+/// Reads, overrides (each "Sublist/Key=value"), validates and builds a scene.
+/// presetDir is where "Linear Solver Preset" names are looked up (xml/solvers).
+Scene loadScene(const std::string& path, const std::vector<std::string>& overrides,
+                const std::string& presetDir);
+
+/// The same from an in-memory list (tests). `file` is only used in messages.
+Scene buildScene(Teuchos::ParameterList pl, const std::string& file, const std::string& presetDir);
+
+/// The schema with defaults and documentation, for --help and docs.
+Teuchos::RCP<const Teuchos::ParameterList> sceneSchema();
+
+}  // namespace perinox

@@ -1,0 +1,773 @@
+// Scene parsing and validation. Every check here exists so that a user's mistake gives one
+// sentence naming the file and key, before any particle is built.
+#include "perinox/io/Scene.hpp"
+
+#include <Teuchos_Array.hpp>
+#include <Teuchos_FileInputSource.hpp>
+#include <Teuchos_StrUtils.hpp>
+#include <Teuchos_XMLObject.hpp>
+#include <Teuchos_XMLParameterListHelpers.hpp>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace perinox {
+
+namespace {
+
+using Teuchos::Array;
+using Teuchos::ParameterList;
+
+template <class T>
+Array<T> arr(std::initializer_list<T> v) {
+  return Array<T>(std::vector<T>(v));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Schema
+// ---------------------------------------------------------------------------------------------
+
+/// Sublists whose children are user-named entries validated against one template.
+const std::map<std::string, std::string>& namedSublists() {
+  static const std::map<std::string, std::string> m{{"Regions", "region"},
+                                                    {"Boundary Conditions", "condition"},
+                                                    {"Loads", "load"},
+                                                    {"Probes", "probe"},
+                                                    {"Holes", "hole"}};
+  return m;
+}
+
+ParameterList holeTemplate() {
+  ParameterList h("hole");
+  h.set("Shape", "Circle", "Circle (disc; cylinder along z in 3D) or Rectangle");
+  h.set("Center", arr<double>({0, 0, 0}), "centre of the hole");
+  h.set("Radius", 0.0, "radius of a Circle");
+  h.set("Half Widths", arr<double>({0, 0, 0}), "half extents of a Rectangle per axis");
+  return h;
+}
+
+ParameterList regionTemplate() {
+  ParameterList r("region");
+  r.set("Type", "Box", "Box, Side Layer, Fictitious Side, Nearest, All Fictitious or All Real");
+  r.set("Lower", arr<double>({0, 0, 0}), "Box: lower corner");
+  r.set("Upper", arr<double>({0, 0, 0}), "Box: upper corner");
+  r.set("Population", "Real", "Box/Nearest: Real, Fictitious or All particles");
+  r.set("Side", "xmin", "Side Layer / Fictitious Side: xmin, xmax, ymin, ymax, zmin, zmax");
+  r.set("Thickness", 0.0, "Side Layer: layer thickness (0 = one particle spacing)");
+  r.set("Point", arr<double>({0, 0, 0}), "Nearest: the point");
+  return r;
+}
+
+ParameterList conditionTemplate() {
+  ParameterList c("condition");
+  c.set("Region", "", "name of the region whose particles are constrained");
+  c.set("Component", "all", "x, y, z or all");
+  c.set("Value", 0.0, "prescribed displacement at load factor 1");
+  c.set("Gradient", arr<double>({}), "optional: u = Value + Gradient . X (per axis)");
+  return c;
+}
+
+ParameterList loadTemplate() {
+  ParameterList l("load");
+  l.set("Region", "", "name of the region carrying the load");
+  l.set("Type", "Total Force", "Total Force (spread over the region by volume), Traction (force per area on a Side Layer), or Body Force (force per volume)");
+  l.set("Value", arr<double>({0, 0, 0}), "the load vector at load factor 1");
+  return l;
+}
+
+ParameterList probeTemplate() {
+  ParameterList p("probe");
+  p.set("Region", "", "region to probe");
+  p.set("Quantity", "Displacement", "Displacement (mean over the region) or Reaction (sum of reaction forces)");
+  return p;
+}
+
+const ParameterList& templateFor(const std::string& sub) {
+  static const std::map<std::string, ParameterList> t{{"Regions", regionTemplate()},
+                                                      {"Boundary Conditions", conditionTemplate()},
+                                                      {"Loads", loadTemplate()},
+                                                      {"Probes", probeTemplate()},
+                                                      {"Holes", holeTemplate()}};
+  return t.at(sub);
+}
+
+Teuchos::RCP<ParameterList> buildSchema() {
+  auto s = Teuchos::rcp(new ParameterList("perinox"));
+  s->set("Title", "", "one line naming the scene");
+  s->set("Description", "", "free text");
+  auto& d = s->sublist("Discretization", false, "particles and families");
+  d.set("Type", "Lattice", "Lattice or Particle File");
+  d.set("Dimension", 2, "1, 2 or 3");
+  d.set("Lower Corner", arr<double>({0, 0, 0}), "Lattice: lower corner of the body");
+  d.set("Upper Corner", arr<double>({1, 1, 1}), "Lattice: upper corner of the body");
+  d.set("Particles", arr<int>({}), "Lattice: particles per axis (or give Spacing)");
+  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles; Particle File: nominal spacing");
+  d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (must be >= 1)");
+  d.set("Horizon", 0.0, "absolute horizon (overrides Horizon Factor when > 0)");
+  d.set("Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A");
+  d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta");
+  d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
+  d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing");
+  d.set("Jitter Seed", 12345, "seed of the jitter");
+  d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
+  auto& m = s->sublist("Material", false, "elastic material");
+  m.set("Model", "Hencky", "Hencky (finite deformation) or Small Strain");
+  m.set("Plane", "Plane Strain", "2D: Plane Strain or Plane Stress");
+  m.set("Young's Modulus", 0.0, "E > 0, in the scene's stress units");
+  m.set("Poisson's Ratio", 0.0, "-1 < nu < 0.5");
+  auto& mo = s->sublist("Model", false, "effects");
+  mo.set("Stabilization", "None", "None or Silling");
+  mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
+  s->sublist("Regions", false, "named particle sets");
+  s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
+  s->sublist("Loads", false, "named loads");
+  s->sublist("Probes", false, "named probes written per load step");
+  auto& r = s->sublist("Reference", false, "analytic reference for errors");
+  r.set("Type", "None", "None, Hydrostatic Hencky or Uniform Stretch");
+  r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
+  r.set("Stretch", 1.0, "Uniform Stretch: l / l0");
+  r.set("Center", arr<double>({0, 0, 0}), "fixed point of the stretch");
+  auto& so = s->sublist("Solver", false, "nonlinear and linear solvers");
+  so.set("Method", "Newton", "Newton (implicit, NOX)");
+  so.set("Load Steps", 10, "equal load increments to load factor 1");
+  so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
+  so.set("Max Newton Iterations", 25, "per load step");
+  so.set("Line Search", "Full Step", "Full Step, Backtrack or Polynomial");
+  so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops");
+  so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
+  so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
+  so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
+  auto& o = s->sublist("Output", false, "what is written");
+  o.set("VTK", true, "write .vtu/.pvtu fields");
+  o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Strict validation
+// ---------------------------------------------------------------------------------------------
+
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1,
+                         prev[j - 1] + (std::tolower(a[i - 1]) == std::tolower(b[j - 1]) ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string typeName(const Teuchos::ParameterEntry& e) {
+  if (e.isList()) return "sublist";
+  return e.getAny().typeName();
+}
+
+std::string friendlyType(const std::string& t) {
+  if (t == "double") return "double";
+  if (t == "int") return "int";
+  if (t == "bool") return "bool";
+  if (t.find("basic_string") != std::string::npos || t == "string") return "string";
+  if (t.find("Array<double>") != std::string::npos) return "Array(double)";
+  if (t.find("Array<int>") != std::string::npos) return "Array(int)";
+  if (t.find("Array<std::") != std::string::npos || t.find("Array<std::__cxx11::basic_string") != std::string::npos) return "Array(string)";
+  return t;
+}
+
+[[noreturn]] void fail(const std::string& file, const std::string& msg) {
+  throw SceneError(file + ": " + msg);
+}
+
+void checkAgainst(const ParameterList& user, const ParameterList& valid, const std::string& path,
+                  const std::string& file) {
+  for (auto it = user.begin(); it != user.end(); ++it) {
+    const std::string& name = user.name(it);
+    const auto& entry = user.entry(it);
+    const std::string key = path.empty() ? name : path + "/" + name;
+    if (!valid.isParameter(name)) {
+      std::string best;
+      std::size_t bestD = 1000;
+      for (auto v = valid.begin(); v != valid.end(); ++v) {
+        const std::size_t dist = editDistance(name, valid.name(v));
+        if (dist < bestD) bestD = dist, best = valid.name(v);
+      }
+      std::string hint = bestD <= 3 ? " (did you mean '" + best + "'?)" : "";
+      std::string allowed;
+      for (auto v = valid.begin(); v != valid.end(); ++v) allowed += (allowed.empty() ? "" : ", ") + valid.name(v);
+      fail(file, "unknown key '" + key + "'" + hint + "; allowed here: " + allowed);
+    }
+    const auto& ventry = valid.getEntry(name);
+    if (entry.isList() != ventry.isList())
+      fail(file, "'" + key + "' must be " + (ventry.isList() ? "a sublist" : "a parameter") + ", not " +
+                     (entry.isList() ? "a sublist" : "a parameter"));
+    if (entry.isList()) {
+      const auto& sub = user.sublist(name);
+      if (path.empty() && name == "Solver") {
+        // "Linear Solver" is Stratimikos' own list, validated by Stratimikos.
+        ParameterList copy(sub);
+        if (copy.isSublist("Linear Solver")) copy.remove("Linear Solver");
+        checkAgainst(copy, valid.sublist(name), key, file);
+        continue;
+      }
+      auto named = namedSublists().find(name);
+      if (named != namedSublists().end()) {
+        for (auto c = sub.begin(); c != sub.end(); ++c) {
+          const std::string ckey = key + "/" + sub.name(c);
+          if (!sub.entry(c).isList())
+            fail(file, "'" + ckey + "' must be a sublist describing one " + named->second);
+          checkAgainst(sub.sublist(sub.name(c)), templateFor(name), ckey, file);
+        }
+        continue;
+      }
+      checkAgainst(sub, valid.sublist(name), key, file);
+      continue;
+    }
+    const std::string ut = friendlyType(typeName(entry)), vt = friendlyType(typeName(ventry));
+    if (ut != vt) fail(file, "'" + key + "' must be of type " + vt + ", not " + ut);
+  }
+}
+
+/// Fills defaults (recursively, including named sublists' children).
+void fillDefaults(ParameterList& user, const ParameterList& valid) {
+  for (auto v = valid.begin(); v != valid.end(); ++v) {
+    const std::string& name = valid.name(v);
+    if (valid.entry(v).isList()) {
+      if (name == "Linear Solver") continue;
+      ParameterList& sub = user.sublist(name);
+      auto named = namedSublists().find(name);
+      if (named != namedSublists().end()) {
+        for (auto c = sub.begin(); c != sub.end(); ++c)
+          fillDefaults(sub.sublist(sub.name(c)), templateFor(name));
+      } else {
+        fillDefaults(sub, valid.sublist(name));
+      }
+    } else if (!user.isParameter(name)) {
+      user.setEntry(name, valid.entry(v));
+    }
+  }
+}
+
+/// Strict checks on the raw XML text that Teuchos' parser lets through: trailing garbage in
+/// numbers ("1.0e-8x"), non-integers for int ("3.5"), duplicate keys.
+bool strictNumber(const std::string& s, bool integer) {
+  std::string t = Teuchos::StrUtils::before(s + " ", " ");
+  const char* b = s.c_str();
+  while (std::isspace(static_cast<unsigned char>(*b))) ++b;
+  if (!*b) return false;
+  char* end = nullptr;
+  if (integer) {
+    std::strtoll(b, &end, 10);
+  } else {
+    std::strtod(b, &end);
+  }
+  while (end && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  return end && *end == '\0';
+}
+
+void strictXml(const Teuchos::XMLObject& obj, const std::string& path, const std::string& file) {
+  std::set<std::string> seen;
+  for (int i = 0; i < obj.numChildren(); ++i) {
+    const Teuchos::XMLObject& c = obj.getChild(i);
+    if (!c.hasAttribute("name")) continue;
+    const std::string name = c.getAttribute("name");
+    const std::string key = path.empty() ? name : path + "/" + name;
+    if (!seen.insert(name).second) fail(file, "key '" + key + "' is given twice");
+    if (c.getTag() == "ParameterList") {
+      strictXml(c, key, file);
+      continue;
+    }
+    if (c.getTag() != "Parameter" || !c.hasAttribute("type") || !c.hasAttribute("value")) continue;
+    const std::string type = c.getAttribute("type"), value = c.getAttribute("value");
+    auto bad = [&](const std::string& what) {
+      fail(file, "'" + key + "' = \"" + value + "\" is not " + what);
+    };
+    if (type == "double" && !strictNumber(value, false)) bad("a number");
+    if (type == "int" && !strictNumber(value, true)) bad("an integer");
+    if (type == "bool") {
+      std::string v = value;
+      std::transform(v.begin(), v.end(), v.begin(), ::tolower);
+      if (v != "true" && v != "false" && v != "1" && v != "0") bad("true or false");
+    }
+    if (type == "Array(double)" || type == "Array(int)") {
+      std::string v = value;
+      const auto l = v.find('{'), r = v.rfind('}');
+      if (l == std::string::npos || r == std::string::npos || r < l) bad("an array like {1, 2}");
+      std::string inner = v.substr(l + 1, r - l - 1);
+      std::stringstream ss(inner);
+      std::string tok;
+      while (std::getline(ss, tok, ','))
+        if (!strictNumber(tok, type == "Array(int)")) bad(type == "Array(int)" ? "an array of integers" : "an array of numbers");
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// --set overrides
+// ---------------------------------------------------------------------------------------------
+
+void applyOverride(ParameterList& pl, const std::string& spec, const ParameterList& schema) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos) throw SceneError("--set " + spec + ": expected Sublist/Key=value");
+  const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  std::string part;
+  while (std::getline(ss, part, '/')) parts.push_back(part);
+  if (parts.empty()) throw SceneError("--set " + spec + ": empty key");
+  ParameterList* cur = &pl;
+  const ParameterList* val = &schema;
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    if (val) {
+      auto named = namedSublists().find(parts[i]);
+      if (named != namedSublists().end() && i + 2 < parts.size()) {
+        cur = &cur->sublist(parts[i]).sublist(parts[i + 1]);
+        val = &templateFor(parts[i]);
+        ++i;
+        continue;
+      }
+      if (val->isSublist(parts[i])) {
+        val = &val->sublist(parts[i]);
+      } else if (parts[i] == "Linear Solver" || !val) {
+        val = nullptr;
+      } else {
+        throw SceneError("--set " + spec + ": unknown sublist '" + parts[i] + "'");
+      }
+    }
+    cur = &cur->sublist(parts[i]);
+  }
+  const std::string& key = parts.back();
+  const Teuchos::ParameterEntry* proto = cur->isParameter(key) ? cur->getEntryPtr(key)
+                                         : (val && val->isParameter(key) ? val->getEntryPtr(key) : nullptr);
+  if (!proto) throw SceneError("--set " + spec + ": unknown key '" + path + "'");
+  const std::string t = friendlyType(typeName(*proto));
+  auto badValue = [&](const std::string& what) {
+    throw SceneError("--set " + spec + ": '" + value + "' is not " + what);
+  };
+  if (t == "double") {
+    if (!strictNumber(value, false)) badValue("a number");
+    cur->set(key, std::strtod(value.c_str(), nullptr));
+  } else if (t == "int") {
+    if (!strictNumber(value, true)) badValue("an integer");
+    cur->set(key, static_cast<int>(std::strtol(value.c_str(), nullptr, 10)));
+  } else if (t == "bool") {
+    if (value != "true" && value != "false") badValue("true or false");
+    cur->set(key, value == "true");
+  } else if (t == "string") {
+    cur->set(key, value);
+  } else if (t == "Array(double)") {
+    cur->set(key, Teuchos::fromStringToArray<double>(value));
+  } else if (t == "Array(int)") {
+    cur->set(key, Teuchos::fromStringToArray<int>(value));
+  } else if (t == "Array(string)") {
+    cur->set(key, Teuchos::fromStringToArray<std::string>(value));
+  } else {
+    throw SceneError("--set " + spec + ": cannot set a value of type " + t);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Building
+// ---------------------------------------------------------------------------------------------
+
+Vec3 vec3(const Array<double>& a) {
+  Vec3 v = Vec3::Zero();
+  for (int i = 0; i < std::min<int>(3, a.size()); ++i) v[i] = a[i];
+  return v;
+}
+
+int componentIndex(const std::string& c) {
+  if (c == "x") return 0;
+  if (c == "y") return 1;
+  if (c == "z") return 2;
+  if (c == "all") return -1;
+  return -2;
+}
+
+double hydrostaticStretch(double lambda, double mu, double traction, const std::string& file) {
+  // Solve 2 (lambda + mu) ln(x) / x = P on the stable branch x < e (plane strain).
+  const double k = 2 * (lambda + mu);
+  if (traction >= k / std::exp(1.0))
+    fail(file, "'Reference/Traction' exceeds the limit load 2(lambda+mu)/e of the Hencky plate");
+  double x = 1.0;
+  for (int it = 0; it < 100; ++it) {
+    const double f = k * std::log(x) / x - traction;
+    const double df = k * (1 - std::log(x)) / (x * x);
+    const double dx = f / df;
+    x -= dx;
+    if (std::abs(dx) < 1e-15 * x) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+Teuchos::RCP<const ParameterList> sceneSchema() {
+  static auto s = buildSchema();
+  return s;
+}
+
+Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir) {
+  const auto schema = sceneSchema();
+  checkAgainst(pl, *schema, "", file);
+  fillDefaults(pl, *schema);
+
+  Scene sc;
+  sc.file = file;
+  sc.title = pl.get<std::string>("Title");
+  auto problem = std::make_shared<ProblemSpec>();
+
+  // --- material ---
+  const auto& dl = pl.sublist("Discretization");
+  const int dim = dl.get<int>("Dimension");
+  if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
+  const auto& ml = pl.sublist("Material");
+  MaterialSpec mat;
+  mat.dim = dim;
+  const std::string model = ml.get<std::string>("Model");
+  if (model == "Hencky") mat.kind = MaterialKind::Hencky;
+  else if (model == "Small Strain") mat.kind = MaterialKind::SmallStrain;
+  else fail(file, "'Material/Model' must be Hencky or Small Strain, not '" + model + "'");
+  const std::string plane = ml.get<std::string>("Plane");
+  if (dim == 2) {
+    if (plane == "Plane Strain") mat.planar = PlanarMode::PlaneStrain;
+    else if (plane == "Plane Stress") mat.planar = PlanarMode::PlaneStress;
+    else fail(file, "'Material/Plane' must be Plane Strain or Plane Stress, not '" + plane + "'");
+  } else {
+    mat.planar = PlanarMode::None;
+  }
+  mat.E = ml.get<double>("Young's Modulus");
+  mat.nu = ml.get<double>("Poisson's Ratio");
+  if (!(mat.E > 0) || !std::isfinite(mat.E)) fail(file, "'Material/Young's Modulus' must be positive");
+  if (!(mat.nu > -1.0 && mat.nu < 0.5))
+    fail(file, "'Material/Poisson's Ratio' must satisfy -1 < nu < 0.5 (nu = 0.5 is incompressible: the Lame constant lambda is infinite)");
+  problem->material = mat;
+
+  // --- discretisation ---
+  const std::string dtype = dl.get<std::string>("Type");
+  const double thickness = dl.get<double>("Thickness");
+  if (!(thickness > 0)) fail(file, "'Discretization/Thickness' must be positive");
+  try {
+    if (dtype == "Lattice") {
+      LatticeSpec ls;
+      ls.dim = dim;
+      ls.lower = vec3(dl.get<Array<double>>("Lower Corner"));
+      ls.upper = vec3(dl.get<Array<double>>("Upper Corner"));
+      const auto counts = dl.get<Array<int>>("Particles");
+      const double spacing = dl.get<double>("Spacing");
+      if (!counts.empty()) {
+        if (static_cast<int>(counts.size()) != dim)
+          fail(file, "'Discretization/Particles' needs " + std::to_string(dim) + " counts, one per axis");
+        for (int a = 0; a < dim; ++a) {
+          if (counts[a] < 1) fail(file, "'Discretization/Particles' counts must be at least 1");
+          ls.counts[a] = counts[a];
+        }
+      } else if (spacing > 0) {
+        for (int a = 0; a < dim; ++a) ls.counts[a] = static_cast<int>(std::lround((ls.upper[a] - ls.lower[a]) / spacing));
+      } else {
+        fail(file, "'Discretization' needs Particles (counts per axis) or a positive Spacing");
+      }
+      for (int a = 0; a < dim; ++a)
+        if (!(ls.upper[a] > ls.lower[a])) fail(file, "'Discretization/Upper Corner' must exceed 'Lower Corner' on every axis");
+      ls.thickness = thickness;
+      ls.horizonFactor = dl.get<double>("Horizon Factor");
+      if (dl.get<double>("Horizon") > 0) fail(file, "'Discretization/Horizon' is for particle files; lattices use 'Horizon Factor'");
+      if (!(ls.horizonFactor >= 1.0))
+        fail(file, "'Discretization/Horizon Factor' must be at least 1: a horizon below the particle spacing leaves particles without neighbours");
+      for (const auto& s : dl.get<Array<std::string>>("Fictitious Sides")) {
+        Side side;
+        if (!parseSide(s, side) || static_cast<int>(side) / 2 >= dim)
+          fail(file, "'Discretization/Fictitious Sides' has an invalid side '" + s + "'");
+        ls.fictitiousSides.push_back(side);
+      }
+      ls.jitter = dl.get<double>("Jitter");
+      if (ls.jitter < 0 || ls.jitter >= 1) fail(file, "'Discretization/Jitter' must be in [0, 1)");
+      ls.jitterSeed = static_cast<unsigned>(dl.get<int>("Jitter Seed"));
+      const auto& holes = dl.sublist("Holes");
+      for (auto h = holes.begin(); h != holes.end(); ++h) {
+        const auto& hl = holes.sublist(holes.name(h));
+        Hole hole;
+        const std::string shape = hl.get<std::string>("Shape");
+        hole.center = vec3(hl.get<Array<double>>("Center"));
+        if (shape == "Circle") {
+          hole.kind = Hole::Kind::Circle;
+          hole.radius = hl.get<double>("Radius");
+          if (!(hole.radius > 0)) fail(file, "'Discretization/Holes/" + holes.name(h) + "/Radius' must be positive");
+        } else if (shape == "Rectangle") {
+          hole.kind = Hole::Kind::Rectangle;
+          hole.halfWidths = vec3(hl.get<Array<double>>("Half Widths"));
+        } else {
+          fail(file, "'Discretization/Holes/" + holes.name(h) + "/Shape' must be Circle or Rectangle");
+        }
+        ls.holes.push_back(hole);
+      }
+      problem->disc = buildLattice(ls);
+    } else if (dtype == "Particle File") {
+      std::string path = dl.get<std::string>("Particle File");
+      if (path.empty()) fail(file, "'Discretization/Particle File' is required when Type = Particle File");
+      if (path[0] != '/') {
+        const auto slash = file.rfind('/');
+        if (slash != std::string::npos) path = file.substr(0, slash + 1) + path;
+      }
+      const double spacing = dl.get<double>("Spacing");
+      double horizon = dl.get<double>("Horizon");
+      if (!(spacing > 0)) fail(file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
+      if (!(horizon > 0)) horizon = dl.get<double>("Horizon Factor") * spacing;
+      if (!(horizon >= spacing)) fail(file, "'Discretization/Horizon' must be at least the spacing");
+      problem->disc = readParticleFile(path, dim, horizon, spacing, thickness);
+    } else {
+      fail(file, "'Discretization/Type' must be Lattice or Particle File, not '" + dtype + "'");
+    }
+  } catch (const std::invalid_argument& e) {
+    fail(file, std::string("Discretization: ") + e.what());
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    fail(file, std::string("Discretization: ") + e.what());
+  }
+  const Discretization& d = problem->disc;
+
+  // --- effects ---
+  const auto& mo = pl.sublist("Model");
+  const std::string stab = mo.get<std::string>("Stabilization");
+  const double G = mo.get<double>("G");
+  if (!(G >= 0) || !std::isfinite(G)) fail(file, "'Model/G' must be a finite number >= 0");
+  if (stab == "Silling") {
+    problem->stabilization = G > 0;
+    problem->stab.G = G;
+    problem->stab.C = micromodulusC(mat, d.horizon, d.thickness);
+  } else if (stab == "None") {
+    if (G > 0) fail(file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
+  } else {
+    fail(file, "'Model/Stabilization' must be None or Silling, not '" + stab + "'");
+  }
+
+  // --- regions ---
+  const auto& rl = pl.sublist("Regions");
+  for (auto it = rl.begin(); it != rl.end(); ++it) {
+    const std::string name = rl.name(it);
+    const auto& r = rl.sublist(name);
+    const std::string type = r.get<std::string>("Type");
+    const std::string popName = r.get<std::string>("Population");
+    Population pop = Population::Real;
+    if (popName == "Fictitious") pop = Population::Fictitious;
+    else if (popName == "All") pop = Population::All;
+    else if (popName != "Real") fail(file, "'Regions/" + name + "/Population' must be Real, Fictitious or All");
+    std::vector<int> ids;
+    auto side = [&]() {
+      Side s;
+      if (!parseSide(r.get<std::string>("Side"), s) || static_cast<int>(s) / 2 >= dim)
+        fail(file, "'Regions/" + name + "/Side' is not a side of this " + std::to_string(dim) + "D body");
+      return s;
+    };
+    if (type == "Box") {
+      ids = selectBox(d, vec3(r.get<Array<double>>("Lower")), vec3(r.get<Array<double>>("Upper")), pop);
+    } else if (type == "Side Layer") {
+      const double t = r.get<double>("Thickness") > 0 ? r.get<double>("Thickness") : d.dx;
+      ids = selectSideLayer(d, side(), t * (1 - 1e-9));
+    } else if (type == "Fictitious Side") {
+      ids = selectFictitiousSide(d, side());
+    } else if (type == "Nearest") {
+      const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
+      if (p >= 0) ids.push_back(p);
+    } else if (type == "All Fictitious" || type == "All Real") {
+      for (int i = 0; i < d.size(); ++i)
+        if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
+    } else {
+      fail(file, "'Regions/" + name + "/Type' must be Box, Side Layer, Fictitious Side, Nearest, All Fictitious or All Real, not '" + type + "'");
+    }
+    if (ids.empty()) fail(file, "region '" + name + "' selects no particle");
+    sc.regions[name] = ids;
+  }
+  auto region = [&](const std::string& key, const std::string& name) -> const std::vector<int>& {
+    auto it = sc.regions.find(name);
+    if (it == sc.regions.end()) fail(file, "'" + key + "' names region '" + name + "', which is not defined under Regions");
+    return it->second;
+  };
+
+  // --- boundary conditions ---
+  const int n = d.size();
+  problem->fixedMask.assign(n, 0);
+  problem->prescribed.assign(static_cast<std::size_t>(n) * dim, 0.0);
+  problem->bodyForce.assign(static_cast<std::size_t>(n) * dim, 0.0);
+  const auto& bl = pl.sublist("Boundary Conditions");
+  for (auto it = bl.begin(); it != bl.end(); ++it) {
+    const std::string name = bl.name(it);
+    const auto& b = bl.sublist(name);
+    const auto& ids = region("Boundary Conditions/" + name + "/Region", b.get<std::string>("Region"));
+    const int comp = componentIndex(b.get<std::string>("Component"));
+    if (comp == -2 || comp >= dim)
+      fail(file, "'Boundary Conditions/" + name + "/Component' must be one of x" + std::string(dim > 1 ? ", y" : "") + (dim > 2 ? ", z" : "") + " or all");
+    const double value = b.get<double>("Value");
+    const auto grad = b.get<Array<double>>("Gradient");
+    if (!grad.empty() && static_cast<int>(grad.size()) != dim)
+      fail(file, "'Boundary Conditions/" + name + "/Gradient' needs " + std::to_string(dim) + " entries");
+    for (int p : ids)
+      for (int c = 0; c < dim; ++c) {
+        if (comp >= 0 && c != comp) continue;
+        double v = value;
+        for (int a = 0; a < static_cast<int>(grad.size()); ++a) v += grad[a] * d.X[p][a];
+        problem->fixedMask[p] |= static_cast<std::uint8_t>(1u << c);
+        problem->prescribed[static_cast<std::size_t>(p) * dim + c] = v;
+      }
+  }
+  // Rigid-body modes must be constrained: rank of the modes restricted to prescribed DOFs.
+  {
+    const int nm = dim == 1 ? 1 : (dim == 2 ? 3 : 6);
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nm, nm);
+    const Vec3 c = 0.5 * (d.boxLower + d.boxUpper);
+    for (int p = 0; p < n; ++p)
+      for (int a = 0; a < dim; ++a) {
+        if (!problem->isFixed(p, a)) continue;
+        Eigen::VectorXd row = Eigen::VectorXd::Zero(nm);
+        row[a] = 1;  // translation a
+        const Vec3 x = (d.X[p] - c) / std::max(d.dx, 1e-300);
+        if (dim == 2) row[2] = a == 0 ? -x[1] : x[0];
+        if (dim == 3) {
+          // rotations about x, y, z: omega x X
+          const Vec3 ex(1, 0, 0), ey(0, 1, 0), ez(0, 0, 1);
+          row[3] = ex.cross(x)[a];
+          row[4] = ey.cross(x)[a];
+          row[5] = ez.cross(x)[a];
+        }
+        M += row * row.transpose();
+      }
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
+    if (es.eigenvalues().minCoeff() <= 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff()))
+      fail(file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
+  }
+
+  // --- loads ---
+  const auto& ll = pl.sublist("Loads");
+  for (auto it = ll.begin(); it != ll.end(); ++it) {
+    const std::string name = ll.name(it);
+    const auto& l = ll.sublist(name);
+    const auto& ids = region("Loads/" + name + "/Region", l.get<std::string>("Region"));
+    const Vec3 value = vec3(l.get<Array<double>>("Value"));
+    const std::string type = l.get<std::string>("Type");
+    double totalV = 0;
+    for (int p : ids) totalV += d.volume[p];
+    for (int p : ids) {
+      if (d.fictitious[p]) fail(file, "load '" + name + "' acts on fictitious particles; loads go on real particles");
+      for (int c = 0; c < dim; ++c) {
+        double b;
+        if (type == "Total Force") b = value[c] / totalV;
+        else if (type == "Traction") b = value[c] / d.dx;  // a layer one spacing thick carries the traction
+        else if (type == "Body Force") b = value[c];
+        else fail(file, "'Loads/" + name + "/Type' must be Total Force, Traction or Body Force, not '" + type + "'");
+        problem->bodyForce[static_cast<std::size_t>(p) * dim + c] += b;
+      }
+    }
+  }
+
+  // --- probes ---
+  const auto& pr = pl.sublist("Probes");
+  for (auto it = pr.begin(); it != pr.end(); ++it) {
+    const std::string name = pr.name(it);
+    const auto& p = pr.sublist(name);
+    ProbeDef def;
+    def.name = name;
+    def.quantity = p.get<std::string>("Quantity");
+    if (def.quantity != "Displacement" && def.quantity != "Reaction")
+      fail(file, "'Probes/" + name + "/Quantity' must be Displacement or Reaction");
+    def.particles = region("Probes/" + name + "/Region", p.get<std::string>("Region"));
+    sc.probes.push_back(def);
+  }
+
+  // --- reference ---
+  const auto& ref = pl.sublist("Reference");
+  sc.reference.type = ref.get<std::string>("Type");
+  sc.reference.center = vec3(ref.get<Array<double>>("Center"));
+  if (sc.reference.type == "Hydrostatic Hencky") {
+    if (dim != 2 || mat.planar != PlanarMode::PlaneStrain || mat.kind != MaterialKind::Hencky)
+      fail(file, "'Reference/Type' Hydrostatic Hencky needs a 2D plane-strain Hencky material");
+    sc.reference.stretch = hydrostaticStretch(lameLambda(mat), lameMu(mat), ref.get<double>("Traction"), file);
+  } else if (sc.reference.type == "Uniform Stretch") {
+    sc.reference.stretch = ref.get<double>("Stretch");
+  } else if (sc.reference.type != "None") {
+    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky or Uniform Stretch");
+  }
+
+  // --- solver ---
+  const auto& so = pl.sublist("Solver");
+  SolverSettings& s = sc.solver;
+  s.method = so.get<std::string>("Method");
+  if (s.method != "Newton") fail(file, "'Solver/Method' must be Newton");
+  s.loadSteps = so.get<int>("Load Steps");
+  if (s.loadSteps < 1) fail(file, "'Solver/Load Steps' must be at least 1");
+  s.tolerance = so.get<double>("Tolerance");
+  if (!(s.tolerance > 0 && s.tolerance < 1)) fail(file, "'Solver/Tolerance' must be in (0, 1)");
+  s.maxIterations = so.get<int>("Max Newton Iterations");
+  if (s.maxIterations < 1) fail(file, "'Solver/Max Newton Iterations' must be at least 1");
+  s.lineSearch = so.get<std::string>("Line Search");
+  if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial")
+    fail(file, "'Solver/Line Search' must be Full Step, Backtrack or Polynomial");
+  s.maxCutbacks = so.get<int>("Max Cutbacks");
+  if (s.maxCutbacks < 0) fail(file, "'Solver/Max Cutbacks' must be >= 0");
+  s.verbosity = so.get<int>("Verbosity");
+  s.linearSolverName = so.get<std::string>("Linear Solver Preset");
+  if (s.linearSolverName == "custom") {
+    if (!so.isSublist("Linear Solver") || so.sublist("Linear Solver").numParams() == 0)
+      fail(file, "'Solver/Linear Solver Preset' is custom but 'Solver/Linear Solver' is empty");
+    s.linearSolver = Teuchos::rcp(new ParameterList(so.sublist("Linear Solver")));
+  } else {
+    if (so.isSublist("Linear Solver") && so.sublist("Linear Solver").numParams() > 0)
+      fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + s.linearSolverName + "'; set the preset to custom");
+    const std::string presetFile = presetDir + "/" + s.linearSolverName + ".xml";
+    std::ifstream probe(presetFile);
+    if (!probe) fail(file, "'Solver/Linear Solver Preset' = '" + s.linearSolverName + "': no file " + presetFile);
+    try {
+      s.linearSolver = Teuchos::getParametersFromXmlFile(presetFile);
+    } catch (const std::exception& e) {
+      fail(presetFile, std::string("cannot read the solver preset: ") + e.what());
+    }
+  }
+
+  // --- output ---
+  sc.output.vtk = pl.sublist("Output").get<bool>("VTK");
+  sc.output.plots = pl.sublist("Output").get<bool>("Plots");
+
+  sc.problem = problem;
+  sc.resolved = Teuchos::rcp(new ParameterList(pl));
+  if (s.linearSolverName != "custom") sc.resolved->sublist("Solver").sublist("Linear Solver").setParameters(*s.linearSolver);
+  return sc;
+}
+
+Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir) {
+  {
+    std::ifstream in(path);
+    if (!in) throw SceneError(path + ": cannot open the scene file");
+  }
+  ParameterList pl;
+  try {
+    Teuchos::FileInputSource src(path);
+    const Teuchos::XMLObject root = src.getObject();
+    if (root.getTag() != "ParameterList") throw SceneError(path + ": the root element must be <ParameterList>");
+    strictXml(root, "", path);
+    pl = *Teuchos::getParametersFromXmlFile(path);
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string msg = e.what();
+    // Teuchos messages can span lines; keep the first informative one.
+    std::string first;
+    std::stringstream ss(msg);
+    std::string line;
+    while (std::getline(ss, line))
+      if (!line.empty() && line.find("Throw") == std::string::npos && line.find("/usr/") == std::string::npos) {
+        first = line;
+        break;
+      }
+    throw SceneError(path + ": malformed scene XML: " + (first.empty() ? msg : first));
+  }
+  const auto schema = sceneSchema();
+  for (const auto& o : overrides) applyOverride(pl, o, *schema);
+  return buildScene(pl, path, presetDir);
+}
+
+}  // namespace perinox

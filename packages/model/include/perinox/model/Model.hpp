@@ -1,0 +1,156 @@
+#pragma once
+// The peridynamic model on one rank: particles it owns plus the ghosts their families reach,
+// and the effects a scene enables. Each owned particle i is an "element": the particles
+// {i} u H_i, its bond force states T_i<xi_ij>, and the element residual and tangent they give:
+//
+//     r_i  -= V_i V_j T_i<xi_ij>,   r_j += V_i V_j T_i<xi_ij>      (force units; R = f_int - f_ext)
+//
+// This is the gradient of the particle's stored energy V_i W(F_i) (plus the stabilisation
+// energy), so the element tangent is symmetric for every energy-derived effect.
+// No Trilinos here: the evaluator maps local particles to degrees of freedom.
+#include <Eigen/Dense>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "perinox/material/Material.hpp"
+
+namespace perinox {
+
+/// Thrown when the model cannot be evaluated at a configuration (inverted or non-finite F,
+/// singular shape tensor). The message names the particle and the field.
+class EvaluationError : public std::runtime_error {
+ public:
+  EvaluationError(const std::string& what, long long particle)
+      : std::runtime_error(what), particle_(particle) {}
+  long long particle() const { return particle_; }
+
+ private:
+  long long particle_;
+};
+
+/// What one rank sees of the discretisation. Local ids: [0, numOwned) are owned particles,
+/// [numOwned, size) ghosts (family members of owned particles owned elsewhere).
+struct LocalParticles {
+  int dim = 2;
+  int numOwned = 0;
+  std::vector<long long> globalId;
+  std::vector<Eigen::Vector3d> X;
+  std::vector<double> volume;
+  // Families of owned particles only, with local neighbour ids (CSR). Broken bonds are removed.
+  std::vector<std::int64_t> famOffset;
+  std::vector<int> famIndex;
+  int size() const { return static_cast<int>(X.size()); }
+};
+
+/// Per-particle workspace handed from the model to each effect.
+template <int D>
+struct BondWork {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  using Mat = Eigen::Matrix<double, D, D>;
+  int i = -1;        // local id of the particle
+  int m = 0;         // family size
+  const int* nbr = nullptr;
+  double Vi = 0;
+  std::vector<Vec> xi, Y, h;   // reference bond, deformed bond, h_j = K^-1 xi_j
+  std::vector<double> Vj;
+  Mat K, Kinv, F;
+  // Outputs accumulated by the effects:
+  std::vector<Vec> t;          // T_i<xi_ij>, j = 0..m-1
+  std::vector<Mat> tan;        // dT_ij/du_k, index j*(m+1) + k; k = 0 is particle i, k = 1+l member l
+  Mat& dT(int j, int k) { return tan[j * (m + 1) + k]; }
+  /// dF/du_k = e_c (x) g_k: g_0 = -sum_l V_l h_l, g_{1+l} = V_l h_l.
+  Vec g(int k) const;
+  Vec gsum;                    // sum_l V_l h_l (so g_0 = -gsum)
+};
+
+/// One effect: adds its bond force states (and their derivatives) for particle i.
+template <int D>
+class ForceEffect {
+ public:
+  virtual ~ForceEffect() = default;
+  virtual const char* name() const = 0;
+  /// Called whenever the local families change (set-up, bonds broken).
+  virtual void prepare(const LocalParticles&) {}
+  /// Adds to w.t (and to w.tan if tangent). Throws EvaluationError on an invalid state.
+  virtual void addForces(BondWork<D>& w, bool tangent) const = 0;
+};
+
+/// Receives element contributions. particles: local ids of the element (i first);
+/// r: n*D values; K: (n*D)x(n*D) dense row-major, or nullptr when no tangent was asked.
+class ElementSink {
+ public:
+  virtual ~ElementSink() = default;
+  virtual void add(const int* particles, int n, const double* r, const double* K) = 0;
+};
+
+/// Stabilisation parameters (Silling 2017; seed 000 eqs 35-44).
+struct StabilizationSpec {
+  double G = 0.0;           // dimensionless
+  double C = 0.0;           // micromodulus / horizon (see micromodulusC)
+};
+
+/// C of the stabilisation term for a material and horizon (FORMULATION.md):
+/// 1D 2E/(A delta^3), 2D 12 k'/(pi h delta^4), 3D 18 k/(pi delta^5).
+double micromodulusC(const MaterialSpec& m, double delta, double thickness);
+
+/// Per-particle output of the model.
+struct ParticleOutput {
+  Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d cauchy = Eigen::Matrix3d::Zero();
+};
+
+/// The composed model. Effects are added once; effects a scene leaves off are never built.
+class Model {
+ public:
+  Model(const MaterialSpec& material, LocalParticles particles);
+  ~Model();
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+
+  void enableCorrespondence();
+  void enableStabilization(const StabilizationSpec& s);
+  std::vector<std::string> effectNames() const;
+
+  const LocalParticles& particles() const { return particles_; }
+  const Material& material() const { return material_; }
+
+  /// Evaluates every owned element at local displacements u (size*dim, interleaved) and hands
+  /// each to the sink (tangent only if wantTangent).
+  void evaluate(const std::vector<double>& u, ElementSink& sink, bool wantTangent) const;
+
+  /// F and Cauchy stress of the owned particles at u.
+  std::vector<ParticleOutput> outputs(const std::vector<double>& u) const;
+
+  /// Removes bonds from the local families (keep(i_local, j_local) == false drops the bond).
+  template <class Pred>
+  void removeBonds(Pred keep);
+
+ struct Impl;  // dimension-specific implementation (Model.cpp)
+
+ private:
+  void checkShapeTensors() const;
+  MaterialSpec materialSpec_;
+  Material material_;
+  LocalParticles particles_;
+  std::unique_ptr<Impl> impl_;
+};
+
+template <class Pred>
+void Model::removeBonds(Pred keep) {
+  std::vector<std::int64_t> off(1, 0);
+  std::vector<int> idx;
+  idx.reserve(particles_.famIndex.size());
+  for (int i = 0; i < particles_.numOwned; ++i) {
+    for (auto p = particles_.famOffset[i]; p < particles_.famOffset[i + 1]; ++p)
+      if (keep(i, particles_.famIndex[p])) idx.push_back(particles_.famIndex[p]);
+    off.push_back(static_cast<std::int64_t>(idx.size()));
+  }
+  particles_.famOffset.swap(off);
+  particles_.famIndex.swap(idx);
+  checkShapeTensors();
+}
+
+}  // namespace perinox

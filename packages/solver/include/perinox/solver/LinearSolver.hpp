@@ -1,0 +1,24 @@
+#pragma once
+// Linear solvers through Stratimikos, chosen in XML: Amesos2 (KLU2) direct, Belos with an
+// Ifpack2 or MueLu preconditioner. Ifpack2 and MueLu are registered here (this build's
+// Stratimikos does not know them for Tpetra by itself).
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_RCP.hpp>
+#include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+
+namespace perinox {
+
+/// Default Stratimikos parameters: Belos block GMRES (the tangent is not always symmetric
+/// once damage is on) with an Ifpack2 ILU(k) preconditioner.
+Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters();
+
+/// Builds the factory. Throws std::invalid_argument with a clear sentence when the choice is
+/// unusable here: the Amesos2 direct solver on more than one rank (this Trilinos build's
+/// KLU2 returns wrong answers in parallel), unknown solver or preconditioner names.
+Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
+    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks);
+
+/// Valid Stratimikos parameters (for validation before any work).
+Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters();
+
+}  // namespace perinox

@@ -1,0 +1,44 @@
+#pragma once
+// Full Newton for one load step through NOX (line search selectable), with the seed's
+// convergence test |R| / |f_ext| <= tol (reaction-normalised when f_ext = 0).
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_RCP.hpp>
+#include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_VectorBase.hpp>
+#include <string>
+#include <vector>
+
+namespace perinox {
+
+class PeridynamicEvaluator;
+
+struct NewtonOptions {
+  double tolerance = 1e-10;        // on the normalised residual
+  int maxIterations = 25;
+  std::string lineSearch = "Full Step";  // "Full Step", "Backtrack", "Polynomial"
+  double linearTolerance = 1e-12;  // relative tolerance handed to iterative linear solvers
+  int verbosity = 0;               // NOX's own output (0 = quiet)
+};
+
+struct NewtonResult {
+  bool converged = false;
+  int iterations = 0;
+  std::vector<double> residuals;   // normalised residual at iterations 0..iterations
+  bool reactionNormalised = false; // true when f_ext = 0 and the reaction norm was the scale
+  double normaliser = 1.0;
+  std::string failure;             // why it failed (empty when converged)
+};
+
+class NewtonSolver {
+ public:
+  NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options);
+  /// Solves f(x) = 0 at the evaluator's current load factor, starting from and updating x.
+  /// On failure x keeps the last iterate; the caller restores a converged state.
+  NewtonResult solve(Thyra::VectorBase<double>& x);
+
+ private:
+  Teuchos::RCP<PeridynamicEvaluator> evaluator_;
+  NewtonOptions options_;
+};
+
+}  // namespace perinox

@@ -1,0 +1,69 @@
+// Stratimikos set-up: kept in its own translation unit (Ifpack2 and MueLu headers are heavy).
+#include "perinox/solver/LinearSolver.hpp"
+
+#include <Stratimikos_DefaultLinearSolverBuilder.hpp>
+#include <Stratimikos_MueLuHelpers.hpp>
+#include <Teuchos_AbstractFactoryStd.hpp>
+#include <Thyra_Ifpack2PreconditionerFactory.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <stdexcept>
+
+namespace perinox {
+
+namespace {
+using Node = Tpetra::Map<int, long long>::node_type;
+
+void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder) {
+  using Base = Thyra::PreconditionerFactoryBase<double>;
+  using Impl = Thyra::Ifpack2PreconditionerFactory<Tpetra::CrsMatrix<double, int, long long, Node>>;
+  builder.setPreconditioningStrategyFactory(Teuchos::abstractFactoryStd<Base, Impl>(), "Ifpack2");
+  Stratimikos::enableMueLu<int, long long, Node>(builder);
+}
+}  // namespace
+
+Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters() {
+  auto p = Teuchos::rcp(new Teuchos::ParameterList("Linear Solver"));
+  p->set("Linear Solver Type", "Belos");
+  auto& belos = p->sublist("Linear Solver Types").sublist("Belos");
+  belos.set("Solver Type", "Block GMRES");
+  auto& gm = belos.sublist("Solver Types").sublist("Block GMRES");
+  gm.set("Convergence Tolerance", 1e-12);
+  gm.set("Maximum Iterations", 2000);
+  gm.set("Num Blocks", 200);
+  p->set("Preconditioner Type", "Ifpack2");
+  auto& ifp = p->sublist("Preconditioner Types").sublist("Ifpack2");
+  ifp.set("Prec Type", "RILUK");
+  ifp.sublist("Ifpack2 Settings").set("fact: iluk level-of-fill", 2);
+  return p;
+}
+
+Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters() {
+  Stratimikos::DefaultLinearSolverBuilder builder;
+  registerSolvers(builder);
+  return builder.getValidParameters();
+}
+
+Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
+    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks) {
+  const std::string type = params->get<std::string>("Linear Solver Type", "Belos");
+  if (type == "Amesos2" && nranks > 1)
+    throw std::invalid_argument(
+        "the direct solver (Linear Solver Type = Amesos2) runs on one MPI rank only: this "
+        "Trilinos build's KLU2 returns wrong solutions on more ranks; use Belos with MueLu or "
+        "Ifpack2 (xml/solvers/) or run on one rank");
+  if (type == "Amesos" || params->get<std::string>("Preconditioner Type", "None") == "Ifpack" ||
+      params->get<std::string>("Preconditioner Type", "None") == "ML")
+    throw std::invalid_argument(
+        "Linear Solver Type 'Amesos' and preconditioners 'Ifpack'/'ML' work on Epetra only; "
+        "use Amesos2, Ifpack2 or MueLu");
+  Stratimikos::DefaultLinearSolverBuilder builder;
+  registerSolvers(builder);
+  try {
+    builder.setParameterList(params);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("invalid linear solver parameters: ") + e.what());
+  }
+  return builder.createLinearSolveStrategy("");
+}
+
+}  // namespace perinox

@@ -1,0 +1,137 @@
+// NOX set-up. One translation unit holds all NOX/Thyra solver headers.
+#include "perinox/solver/NewtonSolver.hpp"
+
+#include <NOX.H>
+#include <NOX_Solver_Factory.H>
+#include <NOX_StatusTest_Combo.H>
+#include <NOX_StatusTest_FiniteValue.H>
+#include <NOX_StatusTest_MaxIters.H>
+#include <NOX_Thyra.H>
+#include <NOX_Thyra_Group.H>
+#include <NOX_Thyra_Vector.H>
+#include <Thyra_VectorStdOps.hpp>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "perinox/evaluator/PeridynamicEvaluator.hpp"
+
+namespace perinox {
+
+namespace {
+
+/// |R| / scale <= tol, with scale = |f_ext| or, when f_ext = 0, the reaction norm at the
+/// current iterate. Records the normalised residual of every iteration.
+class NormalizedResidualTest final : public NOX::StatusTest::Generic {
+ public:
+  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol) : ev_(ev), tol_(tol) {}
+
+  NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver,
+                                          NOX::StatusTest::CheckType) override {
+    const auto& grp = solver.getSolutionGroup();
+    const double normF = grp.getNormF();
+    double scale = ev_.externalForceNorm();
+    reaction_ = false;
+    if (!(scale > 0)) {
+      const auto& x = dynamic_cast<const NOX::Thyra::Vector&>(grp.getX()).getThyraVector();
+      scale = ev_.reactionNorm(x);
+      reaction_ = true;
+    }
+    if (!(scale > 0)) scale = 1.0;  // nothing loaded: absolute residual
+    scale_ = scale;
+    const double r = normF / scale;
+    history_[solver.getNumIterations()] = r;
+    status_ = (std::isfinite(r) && r <= tol_) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
+    return status_;
+  }
+  NOX::StatusTest::StatusType getStatus() const override { return status_; }
+  std::ostream& print(std::ostream& os, int indent = 0) const override {
+    for (int i = 0; i < indent; ++i) os << ' ';
+    return os << "normalised residual <= " << tol_ << "\n";
+  }
+  std::vector<double> history() const {
+    std::vector<double> h;
+    for (const auto& kv : history_) h.push_back(kv.second);
+    return h;
+  }
+  bool reactionNormalised() const { return reaction_; }
+  double scale() const { return scale_; }
+
+ private:
+  const PeridynamicEvaluator& ev_;
+  double tol_;
+  NOX::StatusTest::StatusType status_ = NOX::StatusTest::Unevaluated;
+  std::map<int, double> history_;
+  bool reaction_ = false;
+  double scale_ = 1.0;
+};
+
+}  // namespace
+
+NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options)
+    : evaluator_(std::move(evaluator)), options_(options) {}
+
+NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
+  NewtonResult result;
+  auto params = Teuchos::rcp(new Teuchos::ParameterList("NOX"));
+  params->set("Nonlinear Solver", "Line Search Based");
+  params->sublist("Line Search").set("Method", options_.lineSearch);
+  auto& dir = params->sublist("Direction");
+  dir.set("Method", "Newton");
+  auto& newton = dir.sublist("Newton");
+  newton.set("Forcing Term Method", "Constant");
+  newton.sublist("Linear Solver").set("Tolerance", options_.linearTolerance);
+  newton.set("Rescue Bad Newton Solve", true);
+  auto& print = params->sublist("Printing");
+  print.set("Output Information", options_.verbosity > 0
+                                      ? NOX::Utils::Error + NOX::Utils::Warning + NOX::Utils::OuterIteration +
+                                            NOX::Utils::LinearSolverDetails
+                                      : NOX::Utils::Error);
+  print.set("Output Processor", 0);
+
+  auto x0 = x.clone_v();
+  NOX::Thyra::Vector guess(x0);
+  auto group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_));
+
+  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance));
+  auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
+  auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
+  auto combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
+  combo->addStatusTest(finite);
+  combo->addStatusTest(residualTest);
+  combo->addStatusTest(maxIters);
+
+  NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
+  try {
+    auto solver = NOX::Solver::buildSolver(group, combo, params);
+    status = solver->solve();
+    const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());
+    Thyra::copy(sol.getThyraVector(), Teuchos::ptrFromRef(x));
+    result.iterations = solver->getNumIterations();
+  } catch (const EvaluationError& e) {
+    result.failure = std::string("model evaluation failed: ") + e.what();
+  } catch (const std::exception& e) {
+    result.failure = std::string("solver error: ") + e.what();
+  }
+  result.residuals = residualTest->history();
+  result.reactionNormalised = residualTest->reactionNormalised();
+  result.normaliser = residualTest->scale();
+  result.converged = result.failure.empty() && status == NOX::StatusTest::Converged &&
+                     residualTest->getStatus() == NOX::StatusTest::Converged;
+  if (!result.converged && result.failure.empty()) {
+    std::ostringstream s;
+    if (finite->getStatus() == NOX::StatusTest::Failed)
+      s << "the residual became NaN or infinite";
+    else if (maxIters->getStatus() == NOX::StatusTest::Failed)
+      s << "no convergence in " << options_.maxIterations << " Newton iterations (last normalised residual "
+        << (result.residuals.empty() ? NAN : result.residuals.back()) << ")";
+    else
+      s << "the nonlinear solver stopped without convergence (line search or linear solve failed; last "
+           "normalised residual "
+        << (result.residuals.empty() ? NAN : result.residuals.back()) << ")";
+    result.failure = s.str();
+  }
+  return result;
+}
+
+}  // namespace perinox
