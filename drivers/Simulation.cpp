@@ -139,6 +139,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   auto x = Thyra::createMember(evaluator->get_x_space());
   Thyra::assign(x.ptr(), 0.0);
   auto xConverged = x->clone_v();
+  // Predictor: extrapolate the last converged increment (x_n - x_{n-1}) to the new load
+  // increment. It starts Newton near the new equilibrium, which matters under large rotation.
+  auto xPrevious = x->clone_v();
+  double lastIncrement = 0.0;
 
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
@@ -161,6 +165,12 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     for (;;) {
       const double target = std::min(1.0, lambda + increment);
       evaluator->setLoadFactor(target);
+      Thyra::copy(*xConverged, x.ptr());
+      if (scene.solver.predictor && lastIncrement > 0) {
+        // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
+        const double a = (target - lambda) / lastIncrement;
+        Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged, -a, *xPrevious);
+      }
       nr = newton.solve(*x);
       rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
       if (nr.converged) {
@@ -192,7 +202,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       evaluator->setLoadFactor(lambda);
       break;
     }
+    Thyra::copy(*xConverged, xPrevious.ptr());
     Thyra::copy(*x, xConverged.ptr());
+    lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);
     const auto u = evaluator->ownedDisplacements(*x);
     for (std::size_t k = 0; k < scene.probes.size(); ++k)
       res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
@@ -287,7 +299,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       }
     }
     if (scene.output.plots && !options.plotScript.empty()) {
-      const std::string cmd = "python3 '" + options.plotScript + "' '" + staging + "' > '" + staging + "/plot.log' 2>&1";
+      // Debian's python3 carries python3-matplotlib; another python3 earlier on PATH may not.
+      const char* py = std::getenv("PERINOX_PYTHON");
+      const std::string python = py && *py ? py : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+      const std::string cmd = python + " '" + options.plotScript + "' '" + staging + "' > '" + staging + "/plot.log' 2>&1";
       if (std::system(cmd.c_str()) != 0 && !options.quiet)
         std::cout << "note: plots were not drawn (see plot.log; python3-matplotlib missing?)\n";
     }

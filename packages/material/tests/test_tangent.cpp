@@ -104,3 +104,31 @@ TEST(MaterialTangent, HenckyTangentContinuousAtEqualStretches) {
     EXPECT_LE(relMaxDiff(A1, A0), 10 * gap + 1e-14);
   }
 }
+
+// Either side of the switch between the series and log1p forms of the divided difference
+// (|x| = 1e-5, x ~ -2 gap here), with a tighter tolerance than above: the finite-difference
+// error is ~1e-10 (estimate in kFdTol), while an error in the series' linear coefficient would
+// show up at ~0.1 |x| ~ 1e-6 of the shear part of A. 1e-8 separates the two.
+TEST(MaterialTangent, HenckyTangentAccurateAroundSeriesSwitch) {
+  for (PlanarMode pm : {PlanarMode::PlaneStrain, PlanarMode::PlaneStress}) {
+    const Material m(makeSpec(MaterialKind::Hencky, 2, pm));
+    for (double gap : {4.5e-6, 5.5e-6, -4.5e-6, -5.5e-6}) {
+      SCOPED_TRACE(gap);
+      const Eigen::Matrix2d F = rot2(-15) * Eigen::Vector2d(1.3, 1.3 * (1 + gap)).asDiagonal() * rot2(50);
+      Eigen::Matrix2d P;
+      TangentD<2> A;
+      ASSERT_TRUE(m.stressTangent<2>(F, P, A));
+      EXPECT_LE(relMaxDiff(A, fdTangent<2>(m, F, 1e-6 * 1.3)), 1e-8);
+    }
+  }
+  const Material m3(makeSpec(MaterialKind::Hencky, 3, PlanarMode::None));
+  for (double gap : {4.5e-6, 5.5e-6}) {
+    SCOPED_TRACE(gap);
+    const Eigen::Matrix3d F =
+        rot3(40, {1, 1, 0}) * Eigen::Vector3d(1.3, 1.3 * (1 + gap), 0.8).asDiagonal() * rot3(10, {0, 1, 2});
+    Eigen::Matrix3d P;
+    TangentD<3> A;
+    ASSERT_TRUE(m3.stressTangent<3>(F, P, A));
+    EXPECT_LE(relMaxDiff(A, fdTangent<3>(m3, F, 1e-6 * 1.3)), 1e-8);
+  }
+}

@@ -40,6 +40,7 @@ struct SolverSettings {
   int maxIterations = 25;
   std::string lineSearch = "Full Step";
   int maxCutbacks = 4;
+  bool predictor = true;             // extrapolate the previous increment to start each step
   int verbosity = 0;
   Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
   std::string linearSolverName;                       // preset name or "custom"

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Draws the pictures of one perinox run from its output folder.
+
+    python3 drivers/plot_result.py OUTDIR
+
+Writes OUTDIR/deformed.png (real particles on the deformed configuration, coloured by
+sigma_xx and by |u|) and OUTDIR/probes.png (probe values against the load factor).
+"""
+import csv
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read_fields(path):
+    rows = []
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            rows.append({k: float(v) for k, v in r.items()})
+    return rows
+
+
+def main(out):
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    rows = read_fields(os.path.join(out, "fields.csv"))
+    real = [r for r in rows if r["fictitious"] == 0]
+    fict = [r for r in rows if r["fictitious"] != 0]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    for ax, key, label in ((axes[0], "sxx", "Cauchy stress sigma_xx"), (axes[1], "umag", "|u|")):
+        xs = [r["x"] + r["ux"] for r in real]
+        ys = [r["y"] + r["uy"] for r in real]
+        if key == "umag":
+            cs = [(r["ux"] ** 2 + r["uy"] ** 2 + r["uz"] ** 2) ** 0.5 for r in real]
+        else:
+            cs = [r[key] for r in real]
+        sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet")
+        if fict:
+            ax.scatter([r["x"] + r["ux"] for r in fict], [r["y"] + r["uy"] for r in fict], c="0.6", s=8, marker="s")
+        ax.set_aspect("equal")
+        ax.set_title(label)
+        fig.colorbar(sc, ax=ax, shrink=0.8)
+    status = "converged" if summary["converged"] else "NOT converged"
+    fig.suptitle(f"{summary.get('title', '')} ({status}, final load factor {summary['steps'][-1]['load_factor']:.3g})")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "deformed.png"), dpi=110)
+    plt.close(fig)
+
+    probes = summary.get("probes", {})
+    if probes:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for name, hist in probes.items():
+            key = "reaction" if hist and "reaction" in hist[0] else "displacement"
+            lf = [h["load_factor"] for h in hist]
+            ncomp = len(hist[0][key]) if hist else 0
+            for c in range(ncomp):
+                ax.plot(lf, [h[key][c] for h in hist], marker="o", label=f"{name} {key}[{'xyz'[c]}]")
+        ax.set_xlabel("load factor")
+        ax.grid(True)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, "probes.png"), dpi=110)
+        plt.close(fig)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])

@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Runs a perinox command and checks what it produced. Used by CTest.
+
+    check_run.py --out DIR [checks...] -- COMMAND...
+
+Checks:
+  --exit-code N        the command must exit with N (default 0)
+  --message TEXT       TEXT must appear in the output, and on failure stderr must hold exactly
+                       one non-empty line (one clear sentence, not a stack trace)
+  --no-output          neither DIR nor DIR.partial may exist afterwards
+  --converged          summary.json says converged, every step recorded
+  --max-error X        summary.json's e_u is at most X
+  --quadratic          Newton converges quadratically in its asymptotic range: whenever the
+                       normalised residual r_k is below 1e-2, r_{k+1} <= max(C r_k^2, FLOOR)
+                       with C = 1e3 and FLOOR = 1e-11 (the round-off floor of the residual).
+                       A linearly converging iteration with rate q gives r_{k+1}/r_k^2 = q/r_k,
+                       which exceeds 1e3 as soon as r_k < q/1e3, so a wrong tangent fails.
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+C_QUAD = 1e3
+FLOOR = 1e-11
+
+
+def fail(msg):
+    print("CHECK FAILED: " + msg)
+    sys.exit(1)
+
+
+def own_lines(stderr):
+    """Non-empty stderr lines, without the banners mpiexec adds between dashed rules when a
+    rank exits non-zero (those are the launcher's, not perinox's)."""
+    out, inside = [], False
+    for line in stderr.splitlines():
+        if line.startswith("-----"):
+            inside = not inside
+            continue
+        if not inside and line.strip():
+            out.append(line)
+    return out
+
+
+def main():
+    argv = sys.argv[1:]
+    if "--" not in argv:
+        fail("usage: check_run.py --out DIR [checks] -- COMMAND")
+    split = argv.index("--")
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--exit-code", type=int, default=0)
+    ap.add_argument("--message")
+    ap.add_argument("--no-output", action="store_true")
+    ap.add_argument("--converged", action="store_true")
+    ap.add_argument("--max-error", type=float)
+    ap.add_argument("--quadratic", action="store_true")
+    a = ap.parse_args(argv[:split])
+    cmd = argv[split + 1:]
+    for d in (a.out, a.out + ".partial"):
+        shutil.rmtree(d, ignore_errors=True)
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    text = p.stdout + p.stderr
+    print(text[-4000:])
+    if p.returncode != a.exit_code:
+        fail(f"exit code {p.returncode}, expected {a.exit_code}")
+    if a.message is not None:
+        if a.message not in text:
+            fail(f"expected message containing {a.message!r}")
+        if a.exit_code != 0:
+            lines = own_lines(p.stderr)
+            if len(lines) != 1:
+                fail(f"expected one line on stderr, got {len(lines)}")
+    if a.no_output:
+        for d in (a.out, a.out + ".partial"):
+            if os.path.exists(d):
+                fail(f"{d} exists but the run should have written nothing")
+    if a.converged or a.max_error is not None or a.quadratic:
+        with open(os.path.join(a.out, "summary.json")) as f:
+            s = json.load(f)
+        if a.converged and not s["converged"]:
+            fail("run did not converge: " + s.get("failure", "?"))
+        if a.converged and abs(s["steps"][-1]["load_factor"] - 1.0) > 1e-12:
+            fail("run did not reach load factor 1")
+        if a.max_error is not None:
+            e = s["errors"]["e_u"]
+            print(f"e_u = {e:.6g} (bound {a.max_error})")
+            if not e <= a.max_error:
+                fail(f"e_u = {e} exceeds {a.max_error}")
+        if a.quadratic:
+            pairs = 0
+            for st in s["steps"]:
+                r = st["residuals"]
+                for k in range(len(r) - 1):
+                    if r[k] < 1e-2:
+                        pairs += 1
+                        bound = max(C_QUAD * r[k] ** 2, FLOOR)
+                        if r[k + 1] > bound:
+                            fail(f"step {st['step']}: residual {r[k]:.3e} -> {r[k+1]:.3e} is not quadratic (bound {bound:.3e})")
+            if pairs == 0:
+                fail("no iteration reached the asymptotic range")
+            print(f"quadratic convergence checked on {pairs} iteration pairs")
+    print("CHECK PASSED")
+
+
+if __name__ == "__main__":
+    main()

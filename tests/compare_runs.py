@@ -1,0 +1,51 @@
+#!/usr/bin/env python3
+"""Compares the probes of several perinox runs (e.g. on 1, 2 and 3 MPI ranks).
+
+    compare_runs.py --rtol R DIR_REF DIR...
+
+Every probe value at every load step must agree with the reference run to R relative (to the
+largest magnitude of that probe), and the runs must have the same load factors.
+"""
+import argparse
+import json
+import os
+import sys
+
+
+def load(d):
+    with open(os.path.join(d, "summary.json")) as f:
+        return json.load(f)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rtol", type=float, required=True)
+    ap.add_argument("dirs", nargs="+")
+    a = ap.parse_args()
+    ref = load(a.dirs[0])
+    worst = 0.0
+    for d in a.dirs[1:]:
+        s = load(d)
+        for name, hist in ref["probes"].items():
+            other = s["probes"].get(name)
+            if other is None or len(other) != len(hist):
+                print(f"FAILED: probe {name} differs in length in {d}")
+                sys.exit(1)
+            key = "reaction" if "reaction" in hist[0] else "displacement"
+            scale = max(max(abs(v) for v in h[key]) for h in hist) or 1.0
+            for h, o in zip(hist, other):
+                if abs(h["load_factor"] - o["load_factor"]) > 1e-14:
+                    print(f"FAILED: load factors differ in {d}")
+                    sys.exit(1)
+                for x, y in zip(h[key], o[key]):
+                    worst = max(worst, abs(x - y) / scale)
+        print(f"{d}: ranks {s['ranks']}")
+    print(f"largest relative difference {worst:.3e} (tolerance {a.rtol})")
+    if worst > a.rtol:
+        print("FAILED")
+        sys.exit(1)
+    print("PASSED")
+
+
+if __name__ == "__main__":
+    main()
