@@ -10,6 +10,8 @@ Checks:
   --no-output          neither DIR nor DIR.partial may exist afterwards
   --converged          summary.json says converged, every step recorded
   --max-error X        summary.json's e_u is at most X
+  --probe NAME C V RTOL  the last value of probe NAME, component C, is V within RTOL relative
+  --normalised-by WHAT  every step's residual was normalised by WHAT ("reaction" or "external force")
   --quadratic          Newton converges quadratically in its asymptotic range: whenever the
                        normalised residual r_k is below 1e-2, r_{k+1} <= max(C r_k^2, FLOOR)
                        with C = 1e3 and FLOOR = 1e-11 (the round-off floor of the residual).
@@ -58,6 +60,8 @@ def main():
     ap.add_argument("--converged", action="store_true")
     ap.add_argument("--max-error", type=float)
     ap.add_argument("--quadratic", action="store_true")
+    ap.add_argument("--probe", nargs=4, action="append", default=[])
+    ap.add_argument("--normalised-by")
     a = ap.parse_args(argv[:split])
     cmd = argv[split + 1:]
     for d in (a.out, a.out + ".partial"):
@@ -78,7 +82,7 @@ def main():
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):
                 fail(f"{d} exists but the run should have written nothing")
-    if a.converged or a.max_error is not None or a.quadratic:
+    if a.converged or a.max_error is not None or a.quadratic or a.probe or a.normalised_by:
         with open(os.path.join(a.out, "summary.json")) as f:
             s = json.load(f)
         if a.converged and not s["converged"]:
@@ -90,6 +94,17 @@ def main():
             print(f"e_u = {e:.6g} (bound {a.max_error})")
             if not e <= a.max_error:
                 fail(f"e_u = {e} exceeds {a.max_error}")
+        for name, comp, value, rtol in a.probe:
+            hist = s["probes"][name]
+            key = "reaction" if "reaction" in hist[-1] else "displacement"
+            got, want = hist[-1][key][int(comp)], float(value)
+            print(f"probe {name}[{comp}] = {got:.8g}, reference {want:.8g}, rel. diff {abs(got - want) / abs(want):.3g}")
+            if abs(got - want) > float(rtol) * abs(want):
+                fail(f"probe {name}[{comp}] = {got} differs from {want} by more than {rtol} relative")
+        if a.normalised_by:
+            for st in s["steps"]:
+                if st["normalised_by"] != a.normalised_by:
+                    fail(f"step {st['step']} normalised by {st['normalised_by']}, expected {a.normalised_by}")
         if a.quadratic:
             pairs = 0
             for st in s["steps"]:

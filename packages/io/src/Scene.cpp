@@ -127,7 +127,8 @@ Teuchos::RCP<ParameterList> buildSchema() {
   s->sublist("Loads", false, "named loads");
   s->sublist("Probes", false, "named probes written per load step");
   auto& r = s->sublist("Reference", false, "analytic reference for errors");
-  r.set("Type", "None", "None, Hydrostatic Hencky or Uniform Stretch");
+  r.set("Type", "None", "None, Hydrostatic Hencky, Uniform Stretch or Affine");
+  r.set("Gradient", arr<double>({}), "Affine: displacement gradient H, row-major dim x dim (u = H (X - Center))");
   r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
   r.set("Stretch", 1.0, "Uniform Stretch: l / l0");
   r.set("Center", arr<double>({0, 0, 0}), "fixed point of the stretch");
@@ -690,9 +691,17 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     sc.reference.stretch = hydrostaticStretch(lameLambda(mat), lameMu(mat), ref.get<double>("Traction"), file);
   } else if (sc.reference.type == "Uniform Stretch") {
     sc.reference.stretch = ref.get<double>("Stretch");
+  } else if (sc.reference.type == "Affine") {
+    const auto g = ref.get<Array<double>>("Gradient");
+    if (static_cast<int>(g.size()) != dim * dim)
+      fail(file, "'Reference/Gradient' needs " + std::to_string(dim * dim) + " entries (row-major)");
+    for (int a = 0; a < dim; ++a)
+      for (int b = 0; b < dim; ++b) sc.reference.H(a, b) = g[a * dim + b];
   } else if (sc.reference.type != "None") {
-    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky or Uniform Stretch");
+    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky, Uniform Stretch or Affine");
   }
+  if (sc.reference.type == "Hydrostatic Hencky" || sc.reference.type == "Uniform Stretch")
+    sc.reference.H = (sc.reference.stretch - 1.0) * Eigen::Matrix3d::Identity();
 
   // --- solver ---
   const auto& so = pl.sublist("Solver");

@@ -27,9 +27,11 @@ struct ProbeDef {
   std::vector<int> particles;
 };
 
+/// An analytic reference displacement u_ref(X) = H (X - center).
 struct ReferenceDef {
-  std::string type = "None";     // "None", "Hydrostatic Hencky", "Uniform Stretch"
-  double stretch = 1.0;          // x = l / l0 of the analytic solution
+  std::string type = "None";     // "None", "Hydrostatic Hencky", "Uniform Stretch", "Affine"
+  double stretch = 1.0;          // x = l / l0 (Hydrostatic Hencky, Uniform Stretch)
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   Vec3 center = Vec3::Zero();
 };
 

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs what a fresh Debian bookworm machine lacks, then configures and builds perinox in
+# ./build. Safe to run again: it installs nothing that is already there and rebuilds only
+# what changed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(cmake make g++ trilinos-all-dev libptscotch-dev libeigen3-dev libopenmpi-dev openmpi-bin
+          libgtest-dev nlohmann-json3-dev python3 python3-matplotlib)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+JOBS=${PERINOX_JOBS:-$(nproc)}
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j"$JOBS"
