@@ -10,7 +10,8 @@ Checks:
   --no-output          neither DIR nor DIR.partial may exist afterwards
   --converged          summary.json says converged, every step recorded
   --max-error X        summary.json's e_u is at most X
-  --probe NAME C V RTOL  the last value of probe NAME, component C, is V within RTOL relative
+  --probe NAME[@LF] C V RTOL  probe NAME, component C, at the last step (or the step with load
+                       factor nearest LF) is V within RTOL relative
   --normalised-by WHAT  every step's residual was normalised by WHAT ("reaction" or "external force")
   --quadratic          Newton converges quadratically in its asymptotic range: whenever the
                        normalised residual r_k is below 1e-2, r_{k+1} <= max(C r_k^2, FLOOR)
@@ -95,9 +96,13 @@ def main():
             if not e <= a.max_error:
                 fail(f"e_u = {e} exceeds {a.max_error}")
         for name, comp, value, rtol in a.probe:
+            at = None
+            if "@" in name:
+                name, at = name.split("@")
             hist = s["probes"][name]
-            key = "reaction" if "reaction" in hist[-1] else "displacement"
-            got, want = hist[-1][key][int(comp)], float(value)
+            entry = hist[-1] if at is None else min(hist, key=lambda h: abs(h["load_factor"] - float(at)))
+            key = "reaction" if "reaction" in entry else "displacement"
+            got, want = entry[key][int(comp)], float(value)
             print(f"probe {name}[{comp}] = {got:.8g}, reference {want:.8g}, rel. diff {abs(got - want) / abs(want):.3g}")
             if abs(got - want) > float(rtol) * abs(want):
                 fail(f"probe {name}[{comp}] = {got} differs from {want} by more than {rtol} relative")
