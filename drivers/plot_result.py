@@ -31,7 +31,15 @@ def main(out):
     rows = read_fields(os.path.join(out, "fields.csv"))
     real = [r for r in rows if r["fictitious"] == 0]
     fict = [r for r in rows if r["fictitious"] != 0]
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    xs_all = [r["x"] + r["ux"] for r in real]
+    ys_all = [r["y"] + r["uy"] for r in real]
+    width = (max(xs_all) - min(xs_all)) or 1.0
+    height = (max(ys_all) - min(ys_all)) or 1.0
+    slender = width / height > 4  # beams: stack the panels and stretch the vertical axis
+    if slender:
+        fig, axes = plt.subplots(2, 1, figsize=(12, 6.5))
+    else:
+        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, key, label in ((axes[0], "sxx", "Cauchy stress sigma_xx"), (axes[1], "umag", "|u|")):
         xs = [r["x"] + r["ux"] for r in real]
         ys = [r["y"] + r["uy"] for r in real]
@@ -42,8 +50,12 @@ def main(out):
         sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet")
         if fict:
             ax.scatter([r["x"] + r["ux"] for r in fict], [r["y"] + r["uy"] for r in fict], c="0.6", s=8, marker="s")
-        ax.set_aspect("equal")
-        ax.set_title(label)
+        if slender:
+            ax.set_aspect("auto")
+            ax.set_title(label + " (vertical scale exaggerated)")
+        else:
+            ax.set_aspect("equal")
+            ax.set_title(label)
         fig.colorbar(sc, ax=ax, shrink=0.8)
     status = "converged" if summary["converged"] else "NOT converged"
     fig.suptitle(f"{summary.get('title', '')} ({status}, final load factor {summary['steps'][-1]['load_factor']:.3g})")

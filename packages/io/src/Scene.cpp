@@ -765,15 +765,17 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
     throw;
   } catch (const std::exception& e) {
     std::string msg = e.what();
-    // Teuchos messages can span lines; keep the first informative one.
-    std::string first;
+    // Teuchos messages span lines (source location, throw test, then the reason); keep the
+    // reason: the line that says "error", else the last non-empty line.
+    std::string first, last;
     std::stringstream ss(msg);
     std::string line;
-    while (std::getline(ss, line))
-      if (!line.empty() && line.find("Throw") == std::string::npos && line.find("/usr/") == std::string::npos) {
-        first = line;
-        break;
-      }
+    while (std::getline(ss, line)) {
+      if (line.find_first_not_of(" \t") == std::string::npos) continue;
+      last = line;
+      if (first.empty() && line.find("error") != std::string::npos) first = line;
+    }
+    if (first.empty()) first = last;
     throw SceneError(path + ": malformed scene XML: " + (first.empty() ? msg : first));
   }
   const auto schema = sceneSchema();
