@@ -15,7 +15,8 @@ Checks:
   --normalised-by WHAT  every step's residual was normalised by WHAT ("reaction" or "external force")
   --quadratic          Newton converges quadratically in its asymptotic range: whenever the
                        normalised residual r_k is below 1e-2, r_{k+1} <= max(C r_k^2, FLOOR)
-                       with C = 1e3 and FLOOR = 1e-11 (the round-off floor of the residual).
+                       with C = 1e3 and FLOOR = 1e-11 (the round-off floor of the residual;
+                       --floor sets it for scenes whose floor is higher, e.g. slender beams).
                        A linearly converging iteration with rate q gives r_{k+1}/r_k^2 = q/r_k,
                        which exceeds 1e3 as soon as r_k < q/1e3, so a wrong tangent fails.
 """
@@ -63,6 +64,8 @@ def main():
     ap.add_argument("--quadratic", action="store_true")
     ap.add_argument("--probe", nargs=4, action="append", default=[])
     ap.add_argument("--normalised-by")
+    ap.add_argument("--floor", type=float, default=FLOOR,
+                    help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
     cmd = argv[split + 1:]
     for d in (a.out, a.out + ".partial"):
@@ -117,7 +120,7 @@ def main():
                 for k in range(len(r) - 1):
                     if r[k] < 1e-2:
                         pairs += 1
-                        bound = max(C_QUAD * r[k] ** 2, FLOOR)
+                        bound = max(C_QUAD * r[k] ** 2, a.floor)
                         if r[k + 1] > bound:
                             fail(f"step {st['step']}: residual {r[k]:.3e} -> {r[k+1]:.3e} is not quadratic (bound {bound:.3e})")
             if pairs == 0:

@@ -4,7 +4,8 @@
     compare_runs.py --rtol R DIR_REF DIR...
 
 Every probe value at every load step must agree with the reference run to R relative (to the
-largest magnitude of that probe), and the runs must have the same load factors.
+largest magnitude of that probe), and the runs must have the same load factors. --scale S
+multiplies the other runs' probes by S first (e.g. 1000 to compare metres with millimetres).
 """
 import argparse
 import json
@@ -20,6 +21,8 @@ def load(d):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--rtol", type=float, required=True)
+    ap.add_argument("--scale", type=float, default=1.0,
+                    help="multiply the probes of every run but the first by this (unit changes)")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     ref = load(a.dirs[0])
@@ -38,7 +41,7 @@ def main():
                     print(f"FAILED: load factors differ in {d}")
                     sys.exit(1)
                 for x, y in zip(h[key], o[key]):
-                    worst = max(worst, abs(x - y) / scale)
+                    worst = max(worst, abs(x - a.scale * y) / scale)
         print(f"{d}: ranks {s['ranks']}")
     print(f"largest relative difference {worst:.3e} (tolerance {a.rtol})")
     if worst > a.rtol:

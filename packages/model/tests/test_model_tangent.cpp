@@ -181,3 +181,50 @@ TEST(Model, StabilizationVanishesForAffineDeformation) {
   stab->evaluate(u, b, false);
   EXPECT_LT((a.r - b.r).cwiseAbs().maxCoeff(), 1e-9 * a.r.cwiseAbs().maxCoeff());
 }
+
+// The zero-energy mode of the correspondence model: a checkerboard displacement
+// u_i = a (-1)^(ix+iy) e_x leaves F = I at every particle with a symmetric family (the odd
+// neighbours cancel in sum (u_j - u_i) (x) xi_j), so the unstabilised model gives no force at
+// particles whose whole neighbourhood is interior, while Silling's term restores it with a
+// force proportional to G and opposed to the displacement.
+TEST(Model, CheckerboardModeIsRestoredOnlyByStabilization) {
+  for (double factor : {1.015, 2.015, 3.015}) {
+    LatticeSpec s;
+    s.dim = 2;
+    s.counts = {24, 24, 1};
+    s.upper = Vec3(2.4, 2.4, 1.0);
+    s.horizonFactor = factor;
+    Discretization d = buildLattice(s);
+    const MaterialSpec m = material(2);
+    auto plain = makeModel(d, m, 0.0);
+    auto g1 = makeModel(d, m, 0.1);
+    auto g2 = makeModel(d, m, 0.2);
+    const double a = 1e-3 * d.dx;
+    std::vector<double> u(d.size() * 2, 0.0);
+    for (int i = 0; i < d.size(); ++i) {
+      const int ix = static_cast<int>(std::floor(d.X[i][0] / d.dx)), iy = static_cast<int>(std::floor(d.X[i][1] / d.dx));
+      u[2 * i] = ((ix + iy) % 2 ? -a : a);
+    }
+    DenseSink r0(2, d.size()), r1(2, d.size()), r2(2, d.size());
+    plain->evaluate(u, r0, false);
+    g1->evaluate(u, r1, false);
+    g2->evaluate(u, r2, false);
+    // Interior: at least two horizons (plus a spacing) from every edge, so every particle whose
+    // state reaches i has a complete, symmetric family.
+    const double margin = 2 * d.horizon + d.dx;
+    int count = 0;
+    double maxPlain = 0, maxStab = 0;
+    for (int i = 0; i < d.size(); ++i) {
+      const auto& X = d.X[i];
+      if (X[0] < margin || X[1] < margin || X[0] > 2.4 - margin || X[1] > 2.4 - margin) continue;
+      ++count;
+      maxPlain = std::max(maxPlain, std::abs(r0.r[2 * i]) + std::abs(r0.r[2 * i + 1]));
+      maxStab = std::max(maxStab, std::abs(r1.r[2 * i]));
+      EXPECT_GT(r1.r[2 * i] * u[2 * i], 0.0) << "stabilisation must oppose the mode";
+      EXPECT_NEAR(r2.r[2 * i], 2.0 * r1.r[2 * i], 1e-9 * std::abs(r1.r[2 * i])) << "force must be proportional to G";
+    }
+    ASSERT_GT(count, 10);
+    ASSERT_GT(maxStab, 0.0);
+    EXPECT_LT(maxPlain, 1e-9 * maxStab) << "horizon " << factor;
+  }
+}
