@@ -78,6 +78,8 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   PointField stress{"cauchy_stress", 9, std::vector<double>(9 * n, 0.0)};
   PointField fict{"fictitious", 1, std::vector<double>(n, 0.0)};
   PointField rk{"rank", 1, std::vector<double>(n, static_cast<double>(rank))};
+  const bool damage = ev.problem().damage;
+  PointField dmg{"damage", 1, damage ? ev.ownedDamage() : std::vector<double>(n, 0.0)};
   std::ostringstream csv;
   csv << std::setprecision(12);
   for (std::size_t i = 0; i < n; ++i) {
@@ -90,9 +92,10 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
     csv << p << ',' << d.X[p][0] << ',' << d.X[p][1] << ',' << d.X[p][2] << ',' << disp.values[3 * i] << ','
         << disp.values[3 * i + 1] << ',' << disp.values[3 * i + 2] << ',' << outs[i].cauchy(0, 0) << ','
         << outs[i].cauchy(1, 1) << ',' << outs[i].cauchy(2, 2) << ',' << outs[i].cauchy(0, 1) << ','
-        << static_cast<int>(d.fictitious[p]) << '\n';
+        << static_cast<int>(d.fictitious[p]) << ',' << dmg.values[i] << '\n';
   }
-  const std::vector<PointField> fields{disp, stress, fict, rk};
+  std::vector<PointField> fields{disp, stress, fict, rk};
+  if (damage) fields.push_back(dmg);  // only where the effect is on
   if (vtk) {
     const std::string piece = "fields_" + std::to_string(rank) + ".vtu";
     writeVtu(dir + "/" + piece, pts, fields);
@@ -202,6 +205,42 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       evaluator->setLoadFactor(lambda);
       break;
     }
+    // Damage (seed 000, Fig. 8): bonds never fail inside Newton; after convergence, break every
+    // bond past s_cr, detach particles left without an invertible shape tensor, re-equilibrate at
+    // the same load, and repeat until nothing breaks. Only then does the load grow.
+    if (scene.problem->damage) {
+      for (;;) {
+        const auto rep = evaluator->breakBonds(*x);
+        rec.brokenBonds += rep.brokenBonds;
+        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        if (rep.brokenBonds == 0 && rep.detached.empty()) break;
+        if (rec.breakRounds >= scene.maxBreakRounds) {
+          nr.converged = false;
+          nr.failure = "bonds were still breaking after " + std::to_string(rec.breakRounds) + " re-equilibrations";
+          break;
+        }
+        ++rec.breakRounds;
+        const NewtonResult re = newton.solve(*x);
+        rec.newtonIterations += re.iterations;
+        rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
+        if (!re.converged) {
+          nr = re;
+          nr.failure = "re-equilibration after breaking " + std::to_string(rep.brokenBonds) + " bond(s) failed: " + re.failure;
+          break;
+        }
+      }
+      if (!nr.converged) {
+        res.steps.back() = rec;
+        ok = false;
+        res.failure = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
+        break;
+      }
+      rec.elapsed = now() - tStep;
+      res.steps.back() = rec;
+      if (rank == 0 && !options.quiet && (rec.brokenBonds > 0 || !rec.detached.empty()))
+        std::cout << "    damage: " << rec.brokenBonds << " bond(s) broken, " << rec.breakRounds
+                  << " re-equilibration(s), " << rec.detached.size() << " particle(s) detached\n";
+    }
     Thyra::copy(*xConverged, xPrevious.ptr());
     Thyra::copy(*x, xConverged.ptr());
     lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);
@@ -232,7 +271,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     // Gather per-rank particle CSVs into one file for plotting.
     {
       std::ofstream all(staging + "/fields.csv");
-      all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious\n";
+      all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
       for (int r = 0; r < nranks; ++r) {
         const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
         std::ifstream in(part);
@@ -264,10 +303,19 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                        {"residuals", s.residuals},
                        {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
                        {"cutbacks", s.cutbacks},
+                       {"broken_bonds", s.brokenBonds},
+                       {"break_rounds", s.breakRounds},
+                       {"detached", s.detached},
                        {"time_s", s.elapsed}});
       for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
     }
     j["steps"] = steps;
+    if (scene.problem->damage) {
+      long long total = 0;
+      for (const auto& s : res.steps) total += s.brokenBonds;
+      j["broken_bonds_total"] = total;
+      j["detached_particles"] = evaluator->detachedParticles();
+    }
     json probes = json::object();
     for (std::size_t k = 0; k < res.probes.size(); ++k) {
       json list = json::array();

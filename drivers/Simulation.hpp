@@ -19,6 +19,9 @@ struct StepRecord {
   bool reactionNormalised = false;
   int cutbacks = 0;
   double elapsed = 0;
+  long long brokenBonds = 0;       // damage: bonds broken after this step converged
+  int breakRounds = 0;             // damage: re-equilibrations after breaking
+  std::vector<long long> detached; // particles detached in this step
 };
 
 struct RunResult {

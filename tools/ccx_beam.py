@@ -68,7 +68,7 @@ def build_mesh(L, y0, y1, nx, ny):
     return nodes, elems, grid
 
 
-def write_inp(path, case, nx, ny, linear, substeps):
+def write_inp(path, case, nx, ny, linear, substeps, probe="node"):
     c = CASES[case]
     nodes, elems, grid = build_mesh(c["L"], c["y0"], c["y1"], nx, ny)
     etype = "CPS8" if c["plane"] == "stress" else "CPE8"
@@ -106,7 +106,16 @@ def write_inp(path, case, nx, ny, linear, substeps):
     L.append("*NSET, NSET=NMIDL")
     L.append(str(mid_left))
     L.append("*NSET, NSET=NOUT")
-    L.append(str(out_node))
+    if probe == "node":
+        weights = {out_node: 1.0}
+    else:  # depth average over the face x = L (exact for the quadratic trace: 1/6, 2/3, 1/6)
+        weights = {}
+        for ey in range(ny):
+            for jj, w in ((2 * ey, 1 / 6), (2 * ey + 1, 2 / 3), (2 * ey + 2, 1 / 6)):
+                n = grid[(2 * nx, jj)]
+                weights[n] = weights.get(n, 0.0) + w / ny
+    out = sorted(weights)
+    L += [", ".join(str(v) for v in out[k:k + 8]) for k in range(0, len(out), 8)]
     L.append("*MATERIAL, NAME=MAT")
     L.append("*ELASTIC")
     L.append("%.12g, %.12g" % (c["E"], c["nu"]))
@@ -136,13 +145,13 @@ def write_inp(path, case, nx, ny, linear, substeps):
     with open(path, "w") as f:
         f.write("\n".join(L) + "\n")
     total = sum(loads.values())
-    return dict(etype=etype, nnodes=len(nodes), nelems=len(elems), out_node=out_node,
+    return dict(etype=etype, nnodes=len(nodes), nelems=len(elems), weights=weights,
                 total_load=total)
 
 
-def parse_dat(path, out_node):
+def parse_dat(path, weights):
     """Returns [(time, ux, uy)] from the 'displacements (vx,vy,vz) for set NOUT and time T'
-    blocks of a CalculiX .dat file."""
+    blocks of a CalculiX .dat file; (ux, uy) is the weighted sum over the nodes of NOUT."""
     rows = []
     hdr = re.compile(r"displacements \(vx,vy,vz\) for set (\S+) and time\s+(\S+)")
     with open(path) as f:
@@ -155,9 +164,14 @@ def parse_dat(path, out_node):
             k += 1
             while k < len(lines) and not lines[k].split():
                 k += 1
-            parts = lines[k].split()
-            assert int(parts[0]) == out_node, (parts, out_node)
-            rows.append((t, float(parts[1]), float(parts[2])))
+            vals = {}
+            while k < len(lines) and lines[k].split():
+                parts = lines[k].split()
+                vals[int(parts[0])] = (float(parts[1]), float(parts[2]))
+                k += 1
+            assert set(vals) == set(weights), "node set mismatch in %s" % path
+            rows.append((t, sum(w * vals[n][0] for n, w in weights.items()),
+                         sum(w * vals[n][1] for n, w in weights.items())))
         k += 1
     return rows
 
@@ -172,6 +186,9 @@ def main():
     ap.add_argument("--linear", action="store_true", help="small-displacement analysis (no NLGEOM)")
     ap.add_argument("--substeps", type=int, default=1,
                     help="sub-increments per 0.1 load step (output still every 0.1)")
+    ap.add_argument("--probe", choices=("node", "face"), default="node",
+                    help="node: the output node (default); face: depth average over the face x = L "
+                         "(free of the local point-load/point-support singularity at the node)")
     ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS for ccx")
     a = ap.parse_args()
     c = CASES[a.case]
@@ -184,7 +201,7 @@ def main():
         os.makedirs("/tmp/ccx", exist_ok=True)
         work = tempfile.mkdtemp(prefix="%s_" % a.case, dir="/tmp/ccx")
     job = "beam"
-    info = write_inp(os.path.join(work, job + ".inp"), a.case, nx, ny, a.linear, a.substeps)
+    info = write_inp(os.path.join(work, job + ".inp"), a.case, nx, ny, a.linear, a.substeps, a.probe)
     env = dict(os.environ, OMP_NUM_THREADS=str(a.threads), CCX_NPROC_STIFFNESS=str(a.threads),
                CCX_NPROC_EQUATION_SOLVER=str(a.threads))
     r = subprocess.run(["ccx", "-i", job], cwd=work, env=env, stdout=subprocess.PIPE,
@@ -194,7 +211,7 @@ def main():
     if r.returncode != 0 or "*ERROR" in r.stdout:
         sys.stderr.write(r.stdout[-3000:])
         sys.exit("ccx failed (job files in %s)" % work)
-    rows = parse_dat(os.path.join(work, job + ".dat"), info["out_node"])
+    rows = parse_dat(os.path.join(work, job + ".dat"), info["weights"])
     if len(rows) != NSTEPS:
         sys.exit("expected %d increments in the .dat file, got %d (job files in %s)"
                  % (NSTEPS, len(rows), work))
@@ -204,10 +221,11 @@ def main():
     model = "St Venant-Kirchhoff (*ELASTIC, NLGEOM)" if not a.linear else "linear elastic, small displacements"
     head = ("# ccx_beam.py %s: CalculiX %s, mesh %d x %d %s (8-node quads, full integration, plane %s, "
             "thickness 1), %d nodes; E=%g nu=%g, %s; units %s; dead load (total fy %.6g) in %d increments "
-            "(%d sub-increments each); node (%g, %g)"
+            "(%d sub-increments each); %s"
             % (a.case, "NLGEOM" if not a.linear else "linear", nx, ny, info["etype"], c["plane"],
                info["nnodes"], c["E"], c["nu"], model, c["units"], info["total_load"], NSTEPS,
-               a.substeps, c["out"][0], c["out"][1]))
+               a.substeps, ("node (%g, %g)" % c["out"]) if a.probe == "node"
+               else "depth-averaged displacement of the face x = %g" % c["out"][0]))
     text = head + "\nload_factor,ux,uy\n" + "".join(
         "%.4f,%.6e,%.6e\n" % (round(t, 6), ux, uy) for t, ux, uy in rows)
     if a.out:

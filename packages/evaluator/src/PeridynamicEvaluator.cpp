@@ -5,6 +5,7 @@
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <sstream>
 
@@ -72,6 +73,10 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   model_ = std::make_unique<Model>(P.material, localParticles(P.disc, begin_, end_));
   if (P.correspondence) model_->enableCorrespondence();
   if (P.stabilization) model_->enableStabilization(P.stab);
+  if (P.damage) model_->enableDamage(P.damageSpec);
+  // Stiffness scale for frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows
+  // are neither negligible nor dominant in the linear solves.
+  frozenStiffness_ = P.material.E * P.disc.volume.front() / (P.disc.dx * P.disc.dx);
 
   const int D = P.dim();
   freeId_.assign(static_cast<std::size_t>(n) * D, -1);
@@ -300,6 +305,11 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
     W->resumeFill();
     W->setAllToScalar(0.0);
     W->doExport(*overlapMatrix_, *freeExport_, Tpetra::ADD);
+    for (const auto& [lid, value] : frozen_) {
+      (void)value;
+      const LO col = W->getColMap()->getLocalElement(ownedFree_->getGlobalElement(lid));
+      W->sumIntoLocalValues(lid, 1, &frozenStiffness_, &col);
+    }
     W->fillComplete(ownedFree_, ownedFree_);
   }
   return r;
@@ -330,7 +340,45 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
           fd[k] = rd[l * D + c] - lambda_ * fe[k];
           ++k;
         }
+    if (!frozen_.empty()) {
+      auto xd = TOE::getConstTpetraVector(x)->getData();
+      for (const auto& [lid, value] : frozen_) fd[lid] = frozenStiffness_ * (xd[lid] - value);
+    }
   }
+}
+
+PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakBonds(const Thyra::VectorBase<double>& x) {
+  BreakReport rep;
+  const auto u = localDisplacements(x);
+  long long local = model_->breakBonds(u);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
+  const int D = problem_->dim();
+  const long long n = problem_->disc.size();
+  auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
+  for (int round = 0; round < 1000; ++round) {
+    // Flags of every particle that became singular on any rank (rare: after damage only).
+    std::vector<int> mine(n, 0), all(n, 0);
+    for (long long g : model_->singularParticles()) mine[g] = 1;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
+    std::vector<long long> ids;
+    for (long long g = 0; g < n; ++g)
+      if (all[g]) ids.push_back(g);
+    if (ids.empty()) break;
+    model_->isolate(ids);
+    model_->markDetached(ids);
+    for (long long g : ids) {
+      rep.detached.push_back(g);
+      detachedAll_.push_back(g);
+      if (g < begin_ || g >= end_) continue;
+      const int l = static_cast<int>(g - begin_);
+      for (int c = 0; c < D; ++c) {
+        const int lid = overlapFreeLid_[l * D + c];
+        if (lid >= 0) frozen_.emplace_back(lid, xd[lid]);
+      }
+    }
+  }
+  std::sort(detachedAll_.begin(), detachedAll_.end());
+  return rep;
 }
 
 double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextOwnedFree_->norm2(); }

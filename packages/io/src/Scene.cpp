@@ -122,6 +122,12 @@ Teuchos::RCP<ParameterList> buildSchema() {
   auto& mo = s->sublist("Model", false, "effects");
   mo.set("Stabilization", "None", "None or Silling");
   mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
+  auto& dm = s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps");
+  dm.set("Enabled", false, "turn the damage effect on");
+  dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
+  dm.set("Softening Start", 0.0015, "s_min: bond forces soften from here (0 < s_min < s_cr)");
+  dm.set("Beta", 3.0, "steepness of the tanh softening (> 0)");
+  dm.set("Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step");
   s->sublist("Regions", false, "named particle sets");
   s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
   s->sublist("Loads", false, "named loads");
@@ -549,6 +555,21 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     fail(file, "'Model/Stabilization' must be None or Silling, not '" + stab + "'");
   }
 
+  // --- damage ---
+  const auto& dm = pl.sublist("Damage");
+  sc.maxBreakRounds = dm.get<int>("Max Break Rounds");
+  if (dm.get<bool>("Enabled")) {
+    problem->damage = true;
+    problem->damageSpec.sCr = dm.get<double>("Critical Stretch");
+    problem->damageSpec.sMin = dm.get<double>("Softening Start");
+    problem->damageSpec.beta = dm.get<double>("Beta");
+    const auto& ds = problem->damageSpec;
+    if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
+      fail(file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
+    if (!(ds.beta > 0)) fail(file, "'Damage/Beta' must be positive");
+    if (sc.maxBreakRounds < 1) fail(file, "'Damage/Max Break Rounds' must be at least 1");
+  }
+
   // --- regions ---
   const auto& rl = pl.sublist("Regions");
   for (auto it = rl.begin(); it != rl.end(); ++it) {
@@ -737,6 +758,15 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     } catch (const std::exception& e) {
       fail(presetFile, std::string("cannot read the solver preset: ") + e.what());
     }
+  }
+
+  // Damage makes the tangent unsymmetric: conjugate gradients would silently misbehave.
+  if (problem->damage && s.linearSolver->get<std::string>("Linear Solver Type", "") == "Belos") {
+    const auto& belos = s.linearSolver->sublist("Linear Solver Types").sublist("Belos");
+    const std::string st = belos.isParameter("Solver Type") ? belos.get<std::string>("Solver Type") : "";
+    if (st.find("CG") != std::string::npos)
+      fail(file, "damage makes the tangent unsymmetric, but the linear solver is Belos '" + st +
+                     "' (conjugate gradients need a symmetric matrix); use a GMRES preset such as gmres-ilu");
   }
 
   // --- output ---

@@ -36,6 +36,7 @@ struct Model::Impl {
                         bool tangent) const = 0;
   virtual std::vector<ParticleOutput> outputs(const Model& m, const std::vector<double>& u) const = 0;
   virtual void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) = 0;
+  virtual void setDamage(const DamageSpec* d) = 0;
   virtual std::vector<std::string> names() const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
 };
@@ -47,6 +48,32 @@ struct ImplD final : Model::Impl {
   using Vec = Eigen::Matrix<double, D, 1>;
   using Mat = Eigen::Matrix<double, D, D>;
   std::vector<std::unique_ptr<ForceEffect<D>>> effects;
+  std::optional<DamageSpec> damage;
+
+  void setDamage(const DamageSpec* d) override {
+    if (d) damage = *d;
+  }
+
+  /// Bond softening applied to the summed force state of every effect:
+  /// t_j <- T_s(s_j) t_j and dt_j/du_k <- T_s dt_j/du_k + t_j (x) T_s' ds_j/du_k, where
+  /// ds_j/du_j = Y_j / (|Y_j| |xi_j|) = -ds_j/du_i.
+  static void soften(const DamageSpec& d, BondWork<D>& w, bool tangent) {
+    for (int j = 0; j < w.m; ++j) {
+      const double ly = w.Y[j].norm(), lx = w.xi[j].norm();
+      double Ts, dTs;
+      bondSoftening(d, (ly - lx) / lx, Ts, dTs);
+      if (tangent) {
+        for (int k = 0; k <= w.m; ++k) w.dT(j, k) *= Ts;
+        if (dTs != 0.0 && ly > 0) {
+          const Vec dsdu = w.Y[j] / (ly * lx);
+          const Mat B = dTs * w.t[j] * dsdu.transpose();
+          w.dT(j, j + 1) += B;
+          w.dT(j, 0) -= B;
+        }
+      }
+      w.t[j] *= Ts;
+    }
+  }
 
   void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) override {
     if (correspondence) effects.push_back(std::make_unique<CorrespondenceEffect<D>>(mat));
@@ -104,10 +131,12 @@ struct ImplD final : Model::Impl {
     std::vector<int> parts;
     std::vector<double> r, K;
     for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) continue;
       kinematics(p, u, i, w);
       const int m = w.m;
       if (tangent) w.tan.assign(static_cast<std::size_t>(m) * (m + 1), Mat::Zero());
       for (const auto& e : effects) e->addForces(w, tangent);
+      if (damage) soften(*damage, w, tangent);
 
       const int n = m + 1;
       parts.resize(n);
@@ -146,6 +175,10 @@ struct ImplD final : Model::Impl {
     std::vector<ParticleOutput> out(p.numOwned);
     BondWork<D> w;
     for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) {
+        out[i].cauchy.setZero();
+        continue;
+      }
       kinematics(p, u, i, w);
       Mat F = w.F;
       Eigen::Matrix3d s;
@@ -171,6 +204,69 @@ Model::Model(const MaterialSpec& material, LocalParticles particles)
   if (material.dim != particles_.dim)
     throw std::invalid_argument("material dimension differs from the discretisation's");
   checkShapeTensors();
+  familyVolume0_.assign(particles_.numOwned, 0.0);
+  for (int i = 0; i < particles_.numOwned; ++i)
+    for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q)
+      familyVolume0_[i] += particles_.volume[particles_.famIndex[q]];
+}
+
+void Model::enableDamage(const DamageSpec& d) {
+  if (!(d.sMin > 0 && d.sCr > d.sMin && d.beta > 0))
+    throw std::invalid_argument("damage needs 0 < s_min < s_cr and beta > 0");
+  damage_ = d;
+  impl_->setDamage(&d);
+}
+
+long long Model::breakBonds(const std::vector<double>& u) {
+  if (!damage_) return 0;
+  const int D = particles_.dim;
+  long long broken = 0;
+  removeBondsIf([&](int i, int j) {
+    double ly2 = 0, lx2 = 0;
+    for (int a = 0; a < D; ++a) {
+      const double xi = particles_.X[j][a] - particles_.X[i][a];
+      const double y = xi + (u[j * D + a] - u[i * D + a]);
+      ly2 += y * y;
+      lx2 += xi * xi;
+    }
+    const double s = (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2);
+    const bool brk = s >= damage_->sCr;
+    // Count each bond once over all ranks: at the end with the lower global id.
+    broken += brk && particles_.globalId[i] < particles_.globalId[j];
+    return !brk;
+  });
+  return broken;
+}
+
+void Model::isolate(const std::vector<long long>& globalIds) {
+  if (globalIds.empty()) return;
+  std::vector<char> gone(particles_.size(), 0);
+  for (int l = 0; l < particles_.size(); ++l)
+    if (std::binary_search(globalIds.begin(), globalIds.end(), particles_.globalId[l])) gone[l] = 1;
+  removeBondsIf([&](int i, int j) { return !gone[i] && !gone[j]; });
+}
+
+std::vector<long long> Model::singularParticles() const {
+  std::vector<long long> out;
+  for (int i = 0; i < particles_.numOwned; ++i)
+    if (!detached(i) && !shapeTensorInvertible(i)) out.push_back(particles_.globalId[i]);
+  return out;
+}
+
+void Model::markDetached(const std::vector<long long>& globalIds) {
+  if (detached_.empty()) detached_.assign(particles_.numOwned, 0);
+  for (int i = 0; i < particles_.numOwned; ++i)
+    if (std::binary_search(globalIds.begin(), globalIds.end(), particles_.globalId[i])) detached_[i] = 1;
+}
+
+std::vector<double> Model::damageIndex() const {
+  std::vector<double> phi(particles_.numOwned, 0.0);
+  for (int i = 0; i < particles_.numOwned; ++i) {
+    double v = 0;
+    for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) v += particles_.volume[particles_.famIndex[q]];
+    phi[i] = familyVolume0_[i] > 0 ? 1.0 - v / familyVolume0_[i] : 0.0;
+  }
+  return phi;
 }
 
 Model::~Model() = default;
@@ -187,22 +283,27 @@ std::vector<ParticleOutput> Model::outputs(const std::vector<double>& u) const {
   return impl_->outputs(*this, u);
 }
 
-void Model::checkShapeTensors() const {
+bool Model::shapeTensorInvertible(int i) const {
   // A shape tensor must be invertible: the family has to span the space. Measure conditioning
   // relative to the family's own scale so the check is unit-free.
   const int D = particles_.dim;
+  Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
+  double scale = 0;
+  for (auto p = particles_.famOffset[i]; p < particles_.famOffset[i + 1]; ++p) {
+    const int j = particles_.famIndex[p];
+    Eigen::Vector3d xi = particles_.X[j] - particles_.X[i];
+    K += particles_.volume[j] * xi * xi.transpose();
+    scale += particles_.volume[j] * xi.squaredNorm();
+  }
+  if (!(scale > 0)) return false;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K.topLeftCorner(D, D));
+  return es.eigenvalues().minCoeff() > 1e-10 * scale;
+}
+
+void Model::checkShapeTensors() const {
   for (int i = 0; i < particles_.numOwned; ++i) {
-    Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
-    double scale = 0;
-    for (auto p = particles_.famOffset[i]; p < particles_.famOffset[i + 1]; ++p) {
-      const int j = particles_.famIndex[p];
-      Eigen::Vector3d xi = particles_.X[j] - particles_.X[i];
-      K += particles_.volume[j] * xi * xi.transpose();
-      scale += particles_.volume[j] * xi.squaredNorm();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K.topLeftCorner(D, D));
-    const double minEig = es.eigenvalues().minCoeff();
-    if (!(scale > 0) || minEig <= 1e-10 * scale) {
+    if (detached(i)) continue;
+    if (!shapeTensorInvertible(i)) {
       std::ostringstream s;
       s << "particle " << particles_.globalId[i] << " has a singular shape tensor (family of "
         << (particles_.famOffset[i + 1] - particles_.famOffset[i])

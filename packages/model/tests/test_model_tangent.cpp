@@ -228,3 +228,111 @@ TEST(Model, CheckerboardModeIsRestoredOnlyByStabilization) {
     EXPECT_LT(maxPlain, 1e-9 * maxStab) << "horizon " << factor;
   }
 }
+
+// Damage: the softened tangent against finite differences, with bonds below s_min, inside the
+// softening band and beyond s_cr. s_min and s_cr are placed in gaps of the bond-stretch
+// distribution (no bond within 1e-5 of a kink; the differencing step moves stretches by ~1e-7), where central differences are smooth.
+TEST(Model, DamageTangentMatchesFiniteDifferences) {
+  for (int dim : {2, 3}) {
+    Discretization d = smallLattice(dim, 2.015, dim == 2 ? 8 : 6);
+    const int n = d.size(), D = dim;
+    std::vector<double> u = randomDisplacement(n, D, 0.01 * d.dx, 11);
+    for (int i = 0; i < n; ++i) u[i * D] += 0.03 * d.X[i][0];  // mostly positive stretches
+    // Stretches of all bonds.
+    std::vector<double> s;
+    for (int i = 0; i < n; ++i)
+      for (auto q = d.familyOffset[i]; q < d.familyOffset[i + 1]; ++q) {
+        const int j = d.familyIndex[q];
+        Eigen::VectorXd xi(D), y(D);
+        for (int a = 0; a < D; ++a) {
+          xi[a] = d.X[j][a] - d.X[i][a];
+          y[a] = xi[a] + u[j * D + a] - u[i * D + a];
+        }
+        s.push_back((y.norm() - xi.norm()) / xi.norm());
+      }
+    std::sort(s.begin(), s.end());
+    s.erase(std::unique(s.begin(), s.end()), s.end());  // each bond appears from both ends
+    auto gapNear = [&](double frac) {
+      for (std::size_t k = static_cast<std::size_t>(frac * s.size()); k + 1 < s.size(); ++k)
+        if (s[k] > 0 && s[k + 1] - s[k] > 2e-5) return 0.5 * (s[k] + s[k + 1]);
+      return s.back() + 1.0;
+    };
+    DamageSpec ds;
+    ds.sMin = gapNear(0.3);
+    ds.sCr = gapNear(0.75);
+    ds.beta = 3.0;
+    ASSERT_LT(ds.sMin, ds.sCr);
+    int below = 0, band = 0, beyond = 0;
+    for (double v : s) (v < ds.sMin ? below : (v < ds.sCr ? band : beyond))++;
+    ASSERT_GT(below, 0);
+    ASSERT_GT(band, 0);
+    ASSERT_GT(beyond, 0);
+
+    auto model = makeModel(d, material(dim), 0.05);
+    model->enableDamage(ds);
+    DenseSink sk(D, n);
+    model->evaluate(u, sk, true);
+    const double h = 1e-7 * d.dx;
+    Eigen::MatrixXd Kfd(n * D, n * D);
+    for (int k = 0; k < n * D; ++k) {
+      auto up = u, um = u;
+      up[k] += h;
+      um[k] -= h;
+      DenseSink sp(D, n), sm(D, n);
+      model->evaluate(up, sp, false);
+      model->evaluate(um, sm, false);
+      Kfd.col(k) = (sp.r - sm.r) / (2 * h);
+    }
+    const double scale = sk.K.cwiseAbs().maxCoeff();
+    EXPECT_LT((sk.K - Kfd).cwiseAbs().maxCoeff() / scale, 1e-6) << "dim " << dim;
+    // Damage makes the tangent unsymmetric (that is why GMRES is required).
+    EXPECT_GT((sk.K - sk.K.transpose()).cwiseAbs().maxCoeff() / scale, 1e-6);
+  }
+}
+
+// The softening function: values at the band's ends and the corrected derivative
+// dT_s/ds = -1/2 sech^2(n) dn/ds against a central difference.
+TEST(Model, BondSofteningFunction) {
+  DamageSpec ds{0.0015, 0.002, 3.0};
+  double T, dT;
+  bondSoftening(ds, 0.001, T, dT);
+  EXPECT_EQ(T, 1.0);
+  bondSoftening(ds, 0.0025, T, dT);
+  EXPECT_EQ(T, 0.0);
+  bondSoftening(ds, 0.00175, T, dT);  // middle of the band: n = 0
+  EXPECT_NEAR(T, 0.5, 1e-15);
+  for (double s : {0.0016, 0.00175, 0.0019}) {
+    double Tp, Tm, d0;
+    const double h = 1e-9;
+    bondSoftening(ds, s + h, Tp, d0);
+    bondSoftening(ds, s - h, Tm, d0);
+    bondSoftening(ds, s, T, dT);
+    EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT));
+    EXPECT_LT(dT, 0.0);
+  }
+}
+
+// Broken bonds stay broken, and the damage index matches a hand count: in a 1D chain with
+// horizon 1.015 dx, pulling the last particle away breaks exactly its one bond; the last
+// particle then has phi = 1 and its neighbour phi = 1/2 (one of two equal-volume bonds).
+TEST(Model, BreakingIsPermanentAndDamageIndexCounts) {
+  Discretization d = smallLattice(1, 1.015, 6);
+  auto model = makeModel(d, material(1), 0.0);
+  model->enableDamage(DamageSpec{0.01, 0.02, 3.0});
+  const int n = d.size();
+  std::vector<double> u(n, 0.0);
+  u[n - 1] = 0.05 * d.dx;  // stretch 5 % > s_cr
+  EXPECT_EQ(model->breakBonds(u), 1);
+  auto phi = model->damageIndex();
+  EXPECT_DOUBLE_EQ(phi[n - 1], 1.0);
+  EXPECT_DOUBLE_EQ(phi[n - 2], 0.5);
+  for (int i = 0; i < n - 2; ++i) EXPECT_DOUBLE_EQ(phi[i], 0.0);
+  // Unloading does not heal the bond.
+  std::fill(u.begin(), u.end(), 0.0);
+  EXPECT_EQ(model->breakBonds(u), 0);
+  EXPECT_DOUBLE_EQ(model->damageIndex()[n - 1], 1.0);
+  // The isolated particle has a singular shape tensor and is reported.
+  auto sing = model->singularParticles();
+  ASSERT_EQ(sing.size(), 1u);
+  EXPECT_EQ(sing[0], n - 1);
+}

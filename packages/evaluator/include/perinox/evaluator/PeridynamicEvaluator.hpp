@@ -61,6 +61,18 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// global, per component.
   std::vector<double> reactionOn(const Thyra::VectorBase<double>& x, const std::vector<int>& particles) const;
 
+  // --- damage (seed 000 Fig. 8) ---
+  struct BreakReport {
+    long long brokenBonds = 0;             // bonds broken now (global)
+    std::vector<long long> detached;       // particles detached now (global ids, all ranks)
+  };
+  /// After a converged step: breaks every bond with s >= s_cr at x, then detaches (isolates
+  /// and freezes) every particle left with a singular shape tensor, repeating until none is.
+  BreakReport breakBonds(const Thyra::VectorBase<double>& x);
+  /// Damage index of the owned particles.
+  std::vector<double> ownedDamage() const { return model_->damageIndex(); }
+  const std::vector<long long>& detachedParticles() const { return detachedAll_; }
+
   const ProblemSpec& problem() const { return *problem_; }
   const Model& model() const { return *model_; }
   long long firstOwned() const { return begin_; }
@@ -97,6 +109,10 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<TCrsGraph> ownedGraph_, overlapGraph_;
   mutable Teuchos::RCP<TCrsMatrix> overlapMatrix_;
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
+  // Detached particles: their free DOFs are frozen, f = k (x - x_frozen), W_ii = k.
+  std::vector<long long> detachedAll_;
+  std::vector<std::pair<int, double>> frozen_;  // (owned free lid, frozen value)
+  double frozenStiffness_ = 1.0;
 
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> wFactory_;

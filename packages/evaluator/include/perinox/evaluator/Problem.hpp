@@ -18,6 +18,8 @@ struct ProblemSpec {
   bool correspondence = true;
   bool stabilization = false;
   StabilizationSpec stab;
+  bool damage = false;
+  DamageSpec damageSpec;
   // Loading at load factor 1 (scaled by the load factor lambda):
   std::vector<std::uint8_t> fixedMask;  // per particle: bit c set when component c is prescribed
   std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1

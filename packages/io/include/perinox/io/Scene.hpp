@@ -62,6 +62,7 @@ struct Scene {
   ReferenceDef reference;
   SolverSettings solver;
   OutputSettings output;
+  int maxBreakRounds = 50;                        // damage: break/re-equilibrate rounds per step
   Teuchos::RCP<Teuchos::ParameterList> resolved;  // the scene with every default filled in
 };
 

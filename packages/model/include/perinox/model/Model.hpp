@@ -9,8 +9,10 @@
 // energy), so the element tangent is symmetric for every energy-derived effect.
 // No Trilinos here: the evaluator maps local particles to degrees of freedom.
 #include <Eigen/Dense>
+#include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -92,6 +94,31 @@ struct StabilizationSpec {
   double C = 0.0;           // micromodulus / horizon (see micromodulusC)
 };
 
+/// Bond softening of the implicit damage model (seed 000, eqs 45-54):
+/// T_s(s) = 1 below sMin, 1/2 (1 - tanh(beta (sMin + sCr - 2 s) / (sMin - sCr))) in the band,
+/// 0 from sCr on. Bonds with s >= sCr are broken for good after a converged load step.
+struct DamageSpec {
+  double sMin = 0.0015;
+  double sCr = 0.002;
+  double beta = 3.0;
+};
+
+/// T_s(s) and dT_s/ds (dT_s/ds uses the corrected derivative of FORMULATION.md).
+inline void bondSoftening(const DamageSpec& d, double s, double& Ts, double& dTs) {
+  if (s < d.sMin) {
+    Ts = 1.0;
+    dTs = 0.0;
+  } else if (s < d.sCr) {
+    const double n = d.beta * (d.sMin + d.sCr - 2.0 * s) / (d.sMin - d.sCr);
+    const double th = std::tanh(n);
+    Ts = 0.5 * (1.0 - th);
+    dTs = -0.5 * (1.0 - th * th) * (-2.0 * d.beta / (d.sMin - d.sCr));
+  } else {
+    Ts = 0.0;
+    dTs = 0.0;
+  }
+}
+
 /// C of the stabilisation term for a material and horizon (FORMULATION.md):
 /// 1D 2E/(A delta^3), 2D 12 k'/(pi h delta^4), 3D 18 k/(pi delta^5).
 double micromodulusC(const MaterialSpec& m, double delta, double thickness);
@@ -112,7 +139,25 @@ class Model {
 
   void enableCorrespondence();
   void enableStabilization(const StabilizationSpec& s);
+  /// Softens every bond force (of all effects) by T_s(s); see DamageSpec.
+  void enableDamage(const DamageSpec& d);
+  bool damageEnabled() const { return damage_.has_value(); }
   std::vector<std::string> effectNames() const;
+
+  /// Breaks, for good, every bond of an owned particle whose stretch at u is >= sCr. Both
+  /// ends of a bond compute the same stretch bit for bit, so ranks agree without talking.
+  /// Returns the number of bonds broken, each counted on the rank owning its lower-id end
+  /// (so a sum over ranks counts every bond once).
+  long long breakBonds(const std::vector<double>& u);
+  /// Removes every bond to or from the given particles (global ids) and empties their families.
+  void isolate(const std::vector<long long>& globalIds);
+  /// Owned particles (global ids) whose shape tensor is singular, not yet detached.
+  std::vector<long long> singularParticles() const;
+  /// Marks owned particles as detached (their element is skipped). Call isolate() first.
+  void markDetached(const std::vector<long long>& globalIds);
+  bool detached(int ownedLocal) const { return !detached_.empty() && detached_[ownedLocal]; }
+  /// Damage index phi_i = 1 - sum_intact V_j / sum_initial V_j of the owned particles.
+  std::vector<double> damageIndex() const;
 
   const LocalParticles& particles() const { return particles_; }
   const Material& material() const { return material_; }
@@ -124,22 +169,26 @@ class Model {
   /// F and Cauchy stress of the owned particles at u.
   std::vector<ParticleOutput> outputs(const std::vector<double>& u) const;
 
-  /// Removes bonds from the local families (keep(i_local, j_local) == false drops the bond).
+  /// Keeps only the bonds (i_local, j_local) for which keep returns true.
   template <class Pred>
-  void removeBonds(Pred keep);
+  void removeBondsIf(Pred keep);
 
  struct Impl;  // dimension-specific implementation (Model.cpp)
 
  private:
   void checkShapeTensors() const;
+  bool shapeTensorInvertible(int ownedLocal) const;
   MaterialSpec materialSpec_;
+  std::optional<DamageSpec> damage_;
+  std::vector<double> familyVolume0_;   // initial sum of V_j per owned particle
+  std::vector<char> detached_;          // per owned particle
   Material material_;
   LocalParticles particles_;
   std::unique_ptr<Impl> impl_;
 };
 
 template <class Pred>
-void Model::removeBonds(Pred keep) {
+void Model::removeBondsIf(Pred keep) {
   std::vector<std::int64_t> off(1, 0);
   std::vector<int> idx;
   idx.reserve(particles_.famIndex.size());
@@ -150,7 +199,6 @@ void Model::removeBonds(Pred keep) {
   }
   particles_.famOffset.swap(off);
   particles_.famIndex.swap(idx);
-  checkShapeTensors();
 }
 
 }  // namespace perinox
