@@ -137,6 +137,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   nopt.maxIterations = scene.solver.maxIterations;
   nopt.lineSearch = scene.solver.lineSearch;
   nopt.verbosity = scene.solver.verbosity;
+  nopt.floorFactor = scene.solver.floorFactor;
   NewtonSolver newton(evaluator, nopt);
 
   auto x = Thyra::createMember(evaluator->get_x_space());
@@ -193,6 +194,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
     rec.newtonIterations = nr.iterations;
     rec.reactionNormalised = nr.reactionNormalised;
+    rec.atRoundoffFloor = nr.atRoundoffFloor;
+    rec.floor = nr.floorNormalised;
     rec.elapsed = now() - tStep;
     if (!nr.converged) rec.residuals = nr.residuals;
     res.steps.push_back(rec);
@@ -251,7 +254,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
                 << "  newton " << std::setw(2) << nr.iterations << "  |R|/" << (nr.reactionNormalised ? "|reaction|" : "|f_ext|")
                 << " " << std::scientific << std::setprecision(3) << (nr.residuals.empty() ? 0.0 : nr.residuals.back())
-                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << "\n";
+                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
+                << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << "\n";
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
     if (increment < 1.0 / N && nr.iterations <= 6) increment = std::min(1.0 / N, 2 * increment);
   }
@@ -303,6 +307,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                        {"residuals", s.residuals},
                        {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
                        {"cutbacks", s.cutbacks},
+                       {"converged_at_roundoff_floor", s.atRoundoffFloor},
+                       {"roundoff_floor", s.floor},
                        {"broken_bonds", s.brokenBonds},
                        {"break_rounds", s.breakRounds},
                        {"detached", s.detached},

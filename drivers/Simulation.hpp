@@ -17,6 +17,8 @@ struct StepRecord {
   int newtonIterations = 0;
   std::vector<double> residuals;
   bool reactionNormalised = false;
+  bool atRoundoffFloor = false;    // converged on the round-off floor rather than the tolerance
+  double floor = 0;                // that floor, normalised
   int cutbacks = 0;
   double elapsed = 0;
   long long brokenBonds = 0;       // damage: bonds broken after this step converged

@@ -85,6 +85,22 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
       if (!P.isFixed(static_cast<int>(p), c)) freeId_[p * D + c] = numFree_++;
   buildMapsAndGraphs();
 
+  {
+    const auto scale = model_->unitStressForceScale();
+    TVector ov(overlapAll_), owned(ownedAll_);
+    auto od = ov.getDataNonConst();
+    for (int l = 0; l < model_->particles().size(); ++l)
+      for (int c = 0; c < D; ++c) od[l * D + c] = scale[l];
+    od = Teuchos::null;
+    owned.doExport(ov, *allExport_, Tpetra::ADD);
+    auto wd = owned.getData();
+    double s2 = 0, g2 = 0;
+    for (int l = 0; l < model_->particles().numOwned; ++l)
+      for (int c = 0; c < D; ++c)
+        if (overlapFreeLid_[l * D + c] >= 0) s2 += wd[l * D + c] * wd[l * D + c];
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, s2, Teuchos::outArg(g2));
+    roundoffScale_ = std::numeric_limits<double>::epsilon() * P.material.E * std::sqrt(g2);
+  }
   xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(ownedFree_);
   MEB::InArgsSetup<double> in;
   in.setModelEvalDescription("perinox peridynamics");

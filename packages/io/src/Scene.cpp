@@ -145,6 +145,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Max Newton Iterations", 25, "per load step");
   so.set("Line Search", "Full Step", "Full Step, Backtrack or Polynomial");
   so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops");
+  so.set("Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
   so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
@@ -742,6 +743,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   if (s.maxCutbacks < 0) fail(file, "'Solver/Max Cutbacks' must be >= 0");
   s.verbosity = so.get<int>("Verbosity");
   s.predictor = so.get<bool>("Predictor");
+  s.floorFactor = so.get<double>("Round-off Floor Factor");
+  if (!(s.floorFactor >= 0)) fail(file, "'Solver/Round-off Floor Factor' must be >= 0");
   s.linearSolverName = so.get<std::string>("Linear Solver Preset");
   if (s.linearSolverName == "custom") {
     if (!so.isSublist("Linear Solver") || so.sublist("Linear Solver").numParams() == 0)

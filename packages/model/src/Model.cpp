@@ -259,6 +259,30 @@ void Model::markDetached(const std::vector<long long>& globalIds) {
     if (std::binary_search(globalIds.begin(), globalIds.end(), particles_.globalId[i])) detached_[i] = 1;
 }
 
+std::vector<double> Model::unitStressForceScale() const {
+  const int D = particles_.dim;
+  std::vector<double> out(particles_.size(), 0.0);
+  for (int i = 0; i < particles_.numOwned; ++i) {
+    if (detached(i)) continue;
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(D, D);
+    for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) {
+      const int j = particles_.famIndex[q];
+      const Eigen::VectorXd xi = (particles_.X[j] - particles_.X[i]).head(D);
+      K += particles_.volume[j] * xi * xi.transpose();
+    }
+    if (particles_.famOffset[i + 1] == particles_.famOffset[i]) continue;
+    const Eigen::MatrixXd Kinv = K.inverse();
+    for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) {
+      const int j = particles_.famIndex[q];
+      const Eigen::VectorXd xi = (particles_.X[j] - particles_.X[i]).head(D);
+      const double f = particles_.volume[i] * particles_.volume[j] * (Kinv * xi).norm();
+      out[i] += f;
+      out[j] += f;
+    }
+  }
+  return out;
+}
+
 std::vector<double> Model::damageIndex() const {
   std::vector<double> phi(particles_.numOwned, 0.0);
   for (int i = 0; i < particles_.numOwned; ++i) {

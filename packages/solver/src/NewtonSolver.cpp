@@ -24,7 +24,8 @@ namespace {
 /// current iterate. Records the normalised residual of every iteration.
 class NormalizedResidualTest final : public NOX::StatusTest::Generic {
  public:
-  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol) : ev_(ev), tol_(tol) {}
+  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol, double floorFactor)
+      : ev_(ev), tol_(tol), floor_(floorFactor * ev.roundoffScale()) {}
 
   NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver,
                                           NOX::StatusTest::CheckType) override {
@@ -41,7 +42,8 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
     scale_ = scale;
     const double r = normF / scale;
     history_[solver.getNumIterations()] = r;
-    status_ = (std::isfinite(r) && r <= tol_) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
+    atFloor_ = std::isfinite(r) && r > tol_ && normF <= floor_;
+    status_ = (std::isfinite(r) && (r <= tol_ || atFloor_)) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
     return status_;
   }
   NOX::StatusTest::StatusType getStatus() const override { return status_; }
@@ -56,8 +58,12 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
   }
   bool reactionNormalised() const { return reaction_; }
   double scale() const { return scale_; }
+  bool atFloor() const { return atFloor_; }
+  double floorNormalised() const { return floor_ / scale_; }
 
  private:
+  double floor_ = 0.0;
+  bool atFloor_ = false;
   const PeridynamicEvaluator& ev_;
   double tol_;
   NOX::StatusTest::StatusType status_ = NOX::StatusTest::Unevaluated;
@@ -93,7 +99,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   NOX::Thyra::Vector guess(x0);
   auto group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_));
 
-  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance));
+  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance, options_.floorFactor));
   auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
   auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
   auto combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
@@ -116,6 +122,8 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   result.residuals = residualTest->history();
   result.reactionNormalised = residualTest->reactionNormalised();
   result.normaliser = residualTest->scale();
+  result.atRoundoffFloor = residualTest->atFloor();
+  result.floorNormalised = residualTest->floorNormalised();
   result.converged = result.failure.empty() && status == NOX::StatusTest::Converged &&
                      residualTest->getStatus() == NOX::StatusTest::Converged;
   if (!result.converged && result.failure.empty()) {

@@ -51,6 +51,10 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   // --- diagnostics and output ---
   /// |lambda f_ext|_2 over free DOFs (global).
   double externalForceNorm() const;
+  /// Round-off scale of the residual: machine epsilon times the norm, over free DOFs, of the
+  /// internal force a unit strain would produce (E times Model::unitStressForceScale). Rounding in
+  /// F (formed as I + H) is amplified by E, so |R| cannot be resolved much below this.
+  double roundoffScale() const { return roundoffScale_; }
   /// |reaction|_2: the internal force summed on prescribed DOFs at x (global).
   double reactionNorm(const Thyra::VectorBase<double>& x) const;
   /// Displacements of all owned particles (owned * dim, interleaved) for the state x.
@@ -113,6 +117,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   std::vector<long long> detachedAll_;
   std::vector<std::pair<int, double>> frozen_;  // (owned free lid, frozen value)
   double frozenStiffness_ = 1.0;
+  double roundoffScale_ = 0.0;
 
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> wFactory_;

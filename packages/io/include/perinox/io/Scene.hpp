@@ -42,7 +42,8 @@ struct SolverSettings {
   int maxIterations = 25;
   std::string lineSearch = "Full Step";
   int maxCutbacks = 4;
-  bool predictor = true;             // extrapolate the previous increment to start each step
+  bool predictor = true;
+  double floorFactor = 2.0;          // see NewtonOptions::floorFactor             // extrapolate the previous increment to start each step
   int verbosity = 0;
   Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
   std::string linearSolverName;                       // preset name or "custom"

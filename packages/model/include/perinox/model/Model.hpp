@@ -156,6 +156,10 @@ class Model {
   /// Marks owned particles as detached (their element is skipped). Call isolate() first.
   void markDetached(const std::vector<long long>& globalIds);
   bool detached(int ownedLocal) const { return !detached_.empty() && detached_[ownedLocal]; }
+  /// Per local particle, sum over the owned bonds touching it of V_i V_j |K_i^-1 xi_ij|: the
+  /// force a unit stress would put on it. Times E and machine epsilon it bounds the round-off of
+  /// the residual (used for the convergence floor).
+  std::vector<double> unitStressForceScale() const;
   /// Damage index phi_i = 1 - sum_intact V_j / sum_initial V_j of the owned particles.
   std::vector<double> damageIndex() const;
 

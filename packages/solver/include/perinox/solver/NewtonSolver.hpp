@@ -18,6 +18,7 @@ struct NewtonOptions {
   std::string lineSearch = "Full Step";  // "Full Step", "Backtrack", "Polynomial"
   double linearTolerance = 1e-12;  // relative tolerance handed to iterative linear solvers
   int verbosity = 0;               // NOX's own output (0 = quiet)
+  double floorFactor = 10.0;       // also converged when |R| <= floorFactor * roundoffScale (0: off)
 };
 
 struct NewtonResult {
@@ -26,6 +27,8 @@ struct NewtonResult {
   std::vector<double> residuals;   // normalised residual at iterations 0..iterations
   bool reactionNormalised = false; // true when f_ext = 0 and the reaction norm was the scale
   double normaliser = 1.0;
+  bool atRoundoffFloor = false;    // converged on the round-off floor, not on the tolerance
+  double floorNormalised = 0.0;    // the floor, normalised like the residuals
   std::string failure;             // why it failed (empty when converged)
 };
 
