@@ -36,18 +36,23 @@ def main(out):
     width = (max(xs_all) - min(xs_all)) or 1.0
     height = (max(ys_all) - min(ys_all)) or 1.0
     slender = width / height > 4  # beams: stack the panels and stretch the vertical axis
+    panels = [("sxx", "Cauchy stress sigma_xx"), ("umag", "|u|")]
+    if any(r.get("damage", 0) > 0 for r in real):
+        panels.append(("damage", "damage index phi"))
+    n = len(panels)
     if slender:
-        fig, axes = plt.subplots(2, 1, figsize=(12, 6.5))
+        fig, axes = plt.subplots(n, 1, figsize=(12, 3.3 * n))
     else:
-        fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
-    for ax, key, label in ((axes[0], "sxx", "Cauchy stress sigma_xx"), (axes[1], "umag", "|u|")):
+        fig, axes = plt.subplots(1, n, figsize=(6 * n, 4.5))
+    for ax, (key, label) in zip(axes, panels):
         xs = [r["x"] + r["ux"] for r in real]
         ys = [r["y"] + r["uy"] for r in real]
         if key == "umag":
             cs = [(r["ux"] ** 2 + r["uy"] ** 2 + r["uz"] ** 2) ** 0.5 for r in real]
         else:
             cs = [r[key] for r in real]
-        sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet")
+        kw = {"vmin": 0.0, "vmax": max(cs) or 1.0} if key == "damage" else {}
+        sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet", **kw)
         if fict:
             ax.scatter([r["x"] + r["ux"] for r in fict], [r["y"] + r["uy"] for r in fict], c="0.6", s=8, marker="s")
         if slender:

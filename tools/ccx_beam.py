@@ -68,7 +68,7 @@ def build_mesh(L, y0, y1, nx, ny):
     return nodes, elems, grid
 
 
-def write_inp(path, case, nx, ny, linear, substeps, probe="node"):
+def write_inp(path, case, nx, ny, linear, substeps, probe="node", material="svk"):
     c = CASES[case]
     nodes, elems, grid = build_mesh(c["L"], c["y0"], c["y1"], nx, ny)
     etype = "CPS8" if c["plane"] == "stress" else "CPE8"
@@ -117,8 +117,13 @@ def write_inp(path, case, nx, ny, linear, substeps, probe="node"):
     out = sorted(weights)
     L += [", ".join(str(v) for v in out[k:k + 8]) for k in range(0, len(out), 8)]
     L.append("*MATERIAL, NAME=MAT")
-    L.append("*ELASTIC")
-    L.append("%.12g, %.12g" % (c["E"], c["nu"]))
+    if material == "svk":
+        L.append("*ELASTIC")
+        L.append("%.12g, %.12g" % (c["E"], c["nu"]))
+    else:  # compressible neo-Hooke W = C10 (I1bar - 3) + (J - 1)^2 / D1, same mu and K
+        mu, K = c["E"] / (2 * (1 + c["nu"])), c["E"] / (3 * (1 - 2 * c["nu"]))
+        L.append("*HYPERELASTIC, NEO HOOKE")
+        L.append("%.12g, %.12g" % (mu / 2, 2 / K))
     L.append("*SOLID SECTION, ELSET=EALL, MATERIAL=MAT")
     L.append("1.0")
     L.append("*BOUNDARY")
@@ -189,6 +194,9 @@ def main():
     ap.add_argument("--probe", choices=("node", "face"), default="node",
                     help="node: the output node (default); face: depth average over the face x = L "
                          "(free of the local point-load/point-support singularity at the node)")
+    ap.add_argument("--material", choices=("svk", "neohooke"), default="svk",
+                    help="svk: *ELASTIC (St Venant-Kirchhoff under NLGEOM, default); neohooke: "
+                         "*HYPERELASTIC, NEO HOOKE with the same shear and bulk moduli (sensitivity check)")
     ap.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS for ccx")
     a = ap.parse_args()
     c = CASES[a.case]
@@ -201,7 +209,7 @@ def main():
         os.makedirs("/tmp/ccx", exist_ok=True)
         work = tempfile.mkdtemp(prefix="%s_" % a.case, dir="/tmp/ccx")
     job = "beam"
-    info = write_inp(os.path.join(work, job + ".inp"), a.case, nx, ny, a.linear, a.substeps, a.probe)
+    info = write_inp(os.path.join(work, job + ".inp"), a.case, nx, ny, a.linear, a.substeps, a.probe, a.material)
     env = dict(os.environ, OMP_NUM_THREADS=str(a.threads), CCX_NPROC_STIFFNESS=str(a.threads),
                CCX_NPROC_EQUATION_SOLVER=str(a.threads))
     r = subprocess.run(["ccx", "-i", job], cwd=work, env=env, stdout=subprocess.PIPE,
@@ -224,6 +232,8 @@ def main():
         assert abs(t - k / NSTEPS) < 1e-6, (t, k)
 
     model = "St Venant-Kirchhoff (*ELASTIC, NLGEOM)" if not a.linear else "linear elastic, small displacements"
+    if a.material == "neohooke":
+        model = "compressible neo-Hooke (*HYPERELASTIC, NEO HOOKE, same mu and K)"
     head = ("# ccx_beam.py %s: CalculiX %s, mesh %d x %d %s (8-node quads, full integration, plane %s, "
             "thickness 1), %d nodes; E=%g nu=%g, %s; units %s; dead load (total fy %.6g) in %d increments "
             "(%d sub-increments each); %s"
