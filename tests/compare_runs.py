@@ -23,6 +23,8 @@ def main():
     ap.add_argument("--rtol", type=float, required=True)
     ap.add_argument("--scale", type=float, default=1.0,
                     help="multiply the probes of every run but the first by this (unit changes)")
+    ap.add_argument("--final-only", action="store_true",
+                    help="compare only the final state (runs may take different load steps)")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     ref = load(a.dirs[0])
@@ -31,6 +33,8 @@ def main():
         s = load(d)
         for name, hist in ref["probes"].items():
             other = s["probes"].get(name)
+            if a.final_only and other:
+                hist, other = hist[-1:], other[-1:]
             if other is None or len(other) != len(hist):
                 print(f"FAILED: probe {name} differs in length in {d}")
                 sys.exit(1)
