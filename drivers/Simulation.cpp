@@ -15,6 +15,7 @@
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
+#include "perinox/solver/AdrSolver.hpp"
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
 
@@ -175,7 +176,25 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         const double a = (target - lambda) / lastIncrement;
         Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged, -a, *xPrevious);
       }
-      nr = newton.solve(*x);
+      if (scene.solver.method == "ADR") {
+        AdrOptions ao;
+        ao.tolerance = scene.solver.adrTolerance;
+        ao.maxIterations = scene.solver.adrMaxIterations;
+        ao.massSafety = scene.solver.adrMassSafety;
+        AdrResult ar;
+        try {
+          ar = solveAdr(*evaluator, *x, ao);
+        } catch (const EvaluationError& e) {
+          ar.failure = std::string("dynamic relaxation reached an invalid state: ") + e.what();
+        }
+        nr = NewtonResult();
+        nr.converged = ar.converged;
+        nr.iterations = static_cast<int>(std::min<long long>(ar.iterations, 2000000000));
+        nr.residuals = {ar.e1, ar.e2};
+        nr.failure = ar.failure;
+      } else {
+        nr = newton.solve(*x);
+      }
       rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
       if (nr.converged) {
         lambda = target;
@@ -252,8 +271,12 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
     if (rank == 0 && !options.quiet)
       std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
-                << "  newton " << std::setw(2) << nr.iterations << "  |R|/" << (nr.reactionNormalised ? "|reaction|" : "|f_ext|")
-                << " " << std::scientific << std::setprecision(3) << (nr.residuals.empty() ? 0.0 : nr.residuals.back())
+                << (scene.solver.method == "ADR" ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
+                << (scene.solver.method == "ADR" ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
+                << std::scientific << std::setprecision(3)
+                << (nr.residuals.empty() ? 0.0 : (scene.solver.method == "ADR" ? nr.residuals.front() : nr.residuals.back()))
+                << (scene.solver.method == "ADR" ? ", " : "")
+                << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
                 << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << "\n";
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
@@ -296,6 +319,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     j["wall_time_s"] = res.wallTime;
     j["effects"] = evaluator->model().effectNames();
     j["linear_solver"] = scene.solver.linearSolverName;
+    j["method"] = scene.solver.method;
     j["tolerance"] = scene.solver.tolerance;
     json steps = json::array();
     std::ostringstream csv;

@@ -193,7 +193,7 @@ def main():
                     help="sub-increments per 0.1 load step (output still every 0.1)")
     ap.add_argument("--probe", choices=("node", "face"), default="node",
                     help="node: the output node (default); face: depth average over the face x = L "
-                         "(free of the local point-load/point-support singularity at the node)")
+                         "(averages out the local singularity of a point load at the output node)")
     ap.add_argument("--material", choices=("svk", "neohooke"), default="svk",
                     help="svk: *ELASTIC (St Venant-Kirchhoff under NLGEOM, default); neohooke: "
                          "*HYPERELASTIC, NEO HOOKE with the same shear and bulk moduli (sensitivity check)")

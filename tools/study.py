@@ -87,6 +87,8 @@ def main():
     ap.add_argument("--reference", type=float, help="reference normalised value drawn as a line")
     ap.add_argument("--reference-label", default="reference")
     ap.add_argument("--contours", default="", help="sweep values whose sigma_xx pictures to keep")
+    ap.add_argument("--metric", default="probe", choices=["probe", "e_u"],
+                    help="plot the probe (default) or the displacement error e_u against the sweep")
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--perinox", default=os.path.join(ROOT, "build", "drivers", "perinox"))
@@ -135,7 +137,10 @@ def main():
             xs = [x if x > 0 else floor for x in xs]
         else:
             xs = list(range(len(pts)))
-        ys = [p[1] for p in pts]
+        if a.metric == "e_u":
+            ys = [float(r["e_u"]) if r["e_u"] != "" and r["converged"] else float("nan") for r in rows if r["series"] == sv]
+        else:
+            ys = [p[1] for p in pts]
         ax.plot(xs, ys, marker="o", label=f"{series_key} = {sv}" if series_key else "perinox")
         for x, y, p in zip(xs, ys, pts):
             if not p[2]:
@@ -149,7 +154,11 @@ def main():
         ax.set_xlabel(sweep_key)
     if a.reference is not None:
         ax.axhline(a.reference, color="k", linestyle="--", label=a.reference_label)
-    ax.set_ylabel(f"{a.probe}[{'xyz'[a.component]}]" + (f" / {a.normalise:g}" if a.normalise else ""))
+    if a.metric == "e_u":
+        ax.set_ylabel("displacement error e_u (seed 000 eq. 56)")
+        ax.set_yscale("log")
+    else:
+        ax.set_ylabel(f"{a.probe}[{'xyz'[a.component]}]" + (f" / {a.normalise:g}" if a.normalise else ""))
     ax.set_title(os.path.basename(a.scene) + "  (red x: not converged)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)

@@ -139,7 +139,10 @@ Teuchos::RCP<ParameterList> buildSchema() {
   r.set("Stretch", 1.0, "Uniform Stretch: l / l0");
   r.set("Center", arr<double>({0, 0, 0}), "fixed point of the stretch");
   auto& so = s->sublist("Solver", false, "nonlinear and linear solvers");
-  so.set("Method", "Newton", "Newton (implicit, NOX)");
+  so.set("Method", "Newton", "Newton (implicit, NOX) or ADR (explicit adaptive dynamic relaxation)");
+  so.set("ADR Tolerance", 1e-6, "ADR: stop when both e1 and e2 (seed 001) are below this");
+  so.set("ADR Max Iterations", 2000000, "ADR: iterations allowed per load step");
+  so.set("ADR Mass Safety", 4.0, "ADR: fictitious mass = safety * 1/4 sum_j |K_ij| (>= 1 for stability)");
   so.set("Load Steps", 10, "equal load increments to load factor 1");
   so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
   so.set("Max Newton Iterations", 25, "per load step");
@@ -729,7 +732,13 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   const auto& so = pl.sublist("Solver");
   SolverSettings& s = sc.solver;
   s.method = so.get<std::string>("Method");
-  if (s.method != "Newton") fail(file, "'Solver/Method' must be Newton");
+  if (s.method != "Newton" && s.method != "ADR") fail(file, "'Solver/Method' must be Newton or ADR");
+  s.adrTolerance = so.get<double>("ADR Tolerance");
+  s.adrMaxIterations = so.get<int>("ADR Max Iterations");
+  if (!(s.adrTolerance > 0 && s.adrTolerance < 1)) fail(file, "'Solver/ADR Tolerance' must be in (0, 1)");
+  s.adrMassSafety = so.get<double>("ADR Mass Safety");
+  if (!(s.adrMassSafety >= 1.0)) fail(file, "'Solver/ADR Mass Safety' must be at least 1 (the stability bound)");
+  if (s.adrMaxIterations < 1) fail(file, "'Solver/ADR Max Iterations' must be at least 1");
   s.loadSteps = so.get<int>("Load Steps");
   if (s.loadSteps < 1) fail(file, "'Solver/Load Steps' must be at least 1");
   s.tolerance = so.get<double>("Tolerance");

@@ -36,7 +36,10 @@ struct ReferenceDef {
 };
 
 struct SolverSettings {
-  std::string method = "Newton";     // "Newton"
+  std::string method = "Newton";     // "Newton" or "ADR"
+  double adrTolerance = 1e-6;
+  long long adrMaxIterations = 2000000;
+  double adrMassSafety = 4.0;
   int loadSteps = 10;
   double tolerance = 1e-10;
   int maxIterations = 25;
