@@ -161,6 +161,14 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
               << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << "\n";
   while (lambda < 1.0 - 1e-12) {
+    if (step >= scene.solver.maxTotalSteps) {
+      ok = false;
+      std::ostringstream s;
+      s << "reached 'Solver/Max Total Steps' = " << scene.solver.maxTotalSteps << " at load factor " << lambda
+        << " (the load increment had fallen to " << increment << "): the solver can no longer advance the load";
+      res.failure = s.str();
+      break;
+    }
     ++step;
     const double tStep = now();
     StepRecord rec;
@@ -202,6 +210,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       }
       Thyra::copy(*xConverged, x.ptr());
       if (cut >= scene.solver.maxCutbacks) break;
+      if (0.5 * increment < scene.solver.minIncrement / N) {
+        nr.failure += "; the load increment would fall below 'Solver/Min Increment'";
+        break;
+      }
       ++cut;
       increment *= 0.5;
       rec.residuals.clear();

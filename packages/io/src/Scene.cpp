@@ -148,6 +148,8 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Max Newton Iterations", 25, "per load step");
   so.set("Line Search", "Full Step", "Full Step, Backtrack or Polynomial");
   so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops");
+  so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps)");
+  so.set("Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one");
   so.set("Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
@@ -749,6 +751,11 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial")
     fail(file, "'Solver/Line Search' must be Full Step, Backtrack or Polynomial");
   s.maxCutbacks = so.get<int>("Max Cutbacks");
+  s.maxTotalSteps = so.get<int>("Max Total Steps");
+  if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;
+  if (s.maxTotalSteps < s.loadSteps) fail(file, "'Solver/Max Total Steps' must be at least 'Solver/Load Steps' (or 0)");
+  s.minIncrement = so.get<double>("Min Increment");
+  if (!(s.minIncrement > 0 && s.minIncrement <= 1)) fail(file, "'Solver/Min Increment' must be in (0, 1]");
   if (s.maxCutbacks < 0) fail(file, "'Solver/Max Cutbacks' must be >= 0");
   s.verbosity = so.get<int>("Verbosity");
   s.predictor = so.get<bool>("Predictor");

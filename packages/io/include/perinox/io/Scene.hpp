@@ -45,6 +45,8 @@ struct SolverSettings {
   int maxIterations = 25;
   std::string lineSearch = "Full Step";
   int maxCutbacks = 4;
+  int maxTotalSteps = 200;           // including reduced steps
+  double minIncrement = 1e-6;        // fraction of the nominal increment
   bool predictor = true;
   double floorFactor = 2.0;          // see NewtonOptions::floorFactor             // extrapolate the previous increment to start each step
   int verbosity = 0;
