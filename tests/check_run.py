@@ -13,6 +13,9 @@ Checks:
   --probe NAME[@LF] C V RTOL  probe NAME, component C, at the last step (or the step with load
                        factor nearest LF) is V within RTOL relative
   --normalised-by WHAT  every step's residual was normalised by WHAT ("reaction" or "external force")
+  --expect-from-scene XML  read the scene's top-level "Expected Outcome": "converged" (exit 0,
+                       converged) or "failure: TEXT" (exit 3, TEXT in summary.json's failure, the
+                       last converged state written, and no NaN in it)
   --quadratic          Newton converges quadratically in its asymptotic range: whenever the
                        normalised residual r_k is below 1e-2, r_{k+1} <= max(C r_k^2, FLOOR)
                        with C = 1e3 and FLOOR = 1e-11 (the round-off floor of the residual;
@@ -64,10 +67,23 @@ def main():
     ap.add_argument("--quadratic", action="store_true")
     ap.add_argument("--probe", nargs=4, action="append", default=[])
     ap.add_argument("--normalised-by")
+    ap.add_argument("--expect-from-scene")
     ap.add_argument("--floor", type=float, default=FLOOR,
                     help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
     cmd = argv[split + 1:]
+    expected_failure = None
+    if a.expect_from_scene:
+        import xml.etree.ElementTree as ET
+        root = ET.parse(a.expect_from_scene).getroot()
+        outcome = next((p.get("value") for p in root.findall("Parameter") if p.get("name") == "Expected Outcome"), "")
+        if outcome == "converged":
+            a.converged = True
+        elif outcome.startswith("failure:"):
+            expected_failure = outcome[len("failure:"):].strip()
+            a.exit_code = 3
+        else:
+            fail(f"{a.expect_from_scene} has no valid 'Expected Outcome' (got {outcome!r})")
     for d in (a.out, a.out + ".partial"):
         shutil.rmtree(d, ignore_errors=True)
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -82,6 +98,15 @@ def main():
             lines = own_lines(p.stderr)
             if len(lines) != 1:
                 fail(f"expected one line on stderr, got {len(lines)}")
+    if expected_failure is not None:
+        with open(os.path.join(a.out, "summary.json")) as f:
+            s = json.load(f)
+        if s["converged"] or expected_failure not in s.get("failure", ""):
+            fail(f"expected a failure mentioning {expected_failure!r}, got {s.get('failure', 'convergence')!r}")
+        with open(os.path.join(a.out, "fields.csv")) as f:
+            if "nan" in f.read().lower():
+                fail("the written state contains NaN")
+        print(f"stopped as expected: {s['failure']}")
     if a.no_output:
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):

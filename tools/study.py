@@ -91,12 +91,22 @@ def main():
                     help="plot the probe (default) or the displacement error e_u against the sweep")
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--replot", action="store_true", help="redraw study.png from OUT/study.csv without running")
     ap.add_argument("--perinox", default=os.path.join(ROOT, "build", "drivers", "perinox"))
     a = ap.parse_args()
     sweep_key, sweep_vals = parse_sweep(a.sweep)
     series_key, series_vals = parse_sweep(a.series) if a.series else ("", [""])
     contour_vals = [v.strip() for v in a.contours.split(",") if v.strip()]
     os.makedirs(a.out, exist_ok=True)
+    if a.replot:
+        with open(os.path.join(a.out, "study.csv")) as f:
+            rows = []
+            for r in csv.DictReader(f):
+                r["normalised"] = float(r["normalised"]) if r["normalised"] not in ("", "nan") else float("nan")
+                r["converged"] = r["converged"] == "True"
+                r["wall_time_s"] = float(r["wall_time_s"] or 0)
+                rows.append(r)
+        return plot(a, rows, sweep_key, sweep_vals, series_key, series_vals)
     jobs = []
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
         for sv in series_vals:
@@ -118,6 +128,10 @@ def main():
     for r in rows:
         print(f"{series_key or ''} {r['series']:>8} {sweep_key} {r['sweep']:>8}: normalised {r['normalised']:.6g}"
               f"  converged {r['converged']}  newton {r['newton']}  {r['wall_time_s']:.2f} s {r.get('failure', '')}")
+    plot(a, rows, sweep_key, sweep_vals, series_key, series_vals)
+
+
+def plot(a, rows, sweep_key, sweep_vals, series_key, series_vals):
     try:
         import matplotlib
 

@@ -99,6 +99,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   auto s = Teuchos::rcp(new ParameterList("perinox"));
   s->set("Title", "", "one line naming the scene");
   s->set("Description", "", "free text");
+  s->set("Expected Outcome", "", "for test scenes: 'converged', or 'failure: TEXT' where TEXT must appear in the failure reason");
   auto& d = s->sublist("Discretization", false, "particles and families");
   d.set("Type", "Lattice", "Lattice or Particle File");
   d.set("Dimension", 2, "1, 2 or 3");

@@ -117,7 +117,15 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   } catch (const EvaluationError& e) {
     result.failure = std::string("model evaluation failed: ") + e.what();
   } catch (const std::exception& e) {
-    result.failure = std::string("solver error: ") + e.what();
+    // Trilinos exceptions carry the source location and the throw test before the reason;
+    // keep the reason (the last non-empty line).
+    std::string reason, line;
+    std::stringstream ss(e.what());
+    while (std::getline(ss, line))
+      if (line.find_first_not_of(" \t") != std::string::npos) reason = line;
+    if (reason.find("factorization failed") != std::string::npos)
+      reason += " (the tangent is singular: an unstable or unconstrained mode)";
+    result.failure = "linear solver error: " + reason;
   }
   result.residuals = residualTest->history();
   result.reactionNormalised = residualTest->reactionNormalised();

@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""What accuracy costs in time: error against wall time across discretisation, horizon,
+stabilisation and solver, for a scene with a reference value.
+
+    tools/accuracy_cost.py [--quick] --out out/accuracy_cost
+
+Default study: the clamped beam of seed 000 (4.2) against the converged CalculiX mid-span
+deflection (-3.127274 mm, validation/reference/clamped_beam_fem.csv), over particles
+3x75 ... 9x225, horizons 1.015 / 2.015 dx, G = 0 / 0.01, and solvers: Newton with the direct
+solver, Newton with GMRES + ILU, Newton with GMRES + MueLu, and explicit ADR (small cases
+only: it needs tens of thousands of iterations). Each run is the perinox driver; wall time is
+the driver's own (summary.json, set-up included), measured one run at a time.
+Writes OUT/accuracy_cost.csv and OUT/accuracy_cost.png (log-log error against time; the
+lower-left frontier is what a user chooses from).
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+REF = -3.127274
+
+
+def run(perinox, out, sets):
+    cmd = [perinox, "run", os.path.join(ROOT, "xml", "clamped_beam.xml"), "--output", out, "--quiet"]
+    for s in sets:
+        cmd += ["--set", s]
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", PERINOX_PLOT_SCRIPT="")
+    subprocess.run(cmd, capture_output=True, text=True, env=env)
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", default="out/accuracy_cost")
+    ap.add_argument("--quick", action="store_true", help="fewer cases (for a smoke run)")
+    ap.add_argument("--perinox", default=os.path.join(ROOT, "build", "drivers", "perinox"))
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    grids = ["{75,3}", "{125,5}"] if a.quick else ["{75,3}", "{125,5}", "{175,7}", "{225,9}"]
+    horizons = ["1.015"] if a.quick else ["1.015", "2.015"]
+    solvers = [("Newton/direct", ["Solver/Linear Solver Preset=direct"]),
+               ("Newton/GMRES+ILU", ["Solver/Linear Solver Preset=gmres-ilu"]),
+               ("Newton/GMRES+MueLu", ["Solver/Linear Solver Preset=gmres-muelu"]),
+               ("ADR", ["Solver/Method=ADR"])]
+    rows = []
+    for grid in grids:
+        for h in horizons:
+            for G in ["0", "0.01"]:
+                for name, extra in solvers:
+                    if name == "ADR" and grid not in ("{75,3}",):
+                        continue
+                    tag = f"{grid}_{h}_{G}_{name}".replace("/", "-").replace("{", "").replace("}", "").replace(",", "x").replace("+", "")
+                    s = run(a.perinox, os.path.join(a.out, "runs", tag),
+                            [f"Discretization/Particles={grid}", f"Discretization/Horizon Factor={h}", f"Model/G={G}"] + extra)
+                    v = s["probes"]["midspan"][-1]["displacement"][1] if s["converged"] else float("nan")
+                    err = abs(v / REF - 1)
+                    iters = sum(st["newton_iterations"] for st in s["steps"])
+                    rows.append(dict(particles=grid, horizon=h, G=G, solver=name, converged=s["converged"],
+                                     deflection=v, error=err, wall_time_s=s["wall_time_s"], iterations=iters,
+                                     dofs=s["dofs"]))
+                    print(f"{grid:>9} delta {h} G {G:>4} {name:>20}: error {err:.3e}  time {s['wall_time_s']:8.2f} s  iterations {iters}")
+    with open(os.path.join(a.out, "accuracy_cost.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/GMRES+MueLu": "^", "ADR": "x"}
+    colours = {"1.015": "C0", "2.015": "C1"}
+    for r in rows:
+        if not r["converged"]:
+            continue
+        fill = "none" if r["G"] != "0" else colours[r["horizon"]]
+        ax.scatter(r["wall_time_s"], r["error"], marker=markers[r["solver"]], facecolors=fill,
+                   edgecolors=colours[r["horizon"]], s=50)
+        ax.annotate(r["particles"].strip("{}").replace(",", "x"), (r["wall_time_s"], r["error"]), fontsize=6,
+                    xytext=(3, 3), textcoords="offset points")
+    for name, m in markers.items():
+        ax.scatter([], [], marker=m, color="k", label=name)
+    for h, c in colours.items():
+        ax.scatter([], [], marker="o", color=c, label=f"delta = {h} dx (filled G = 0, open G = 0.01)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time of the run [s] (2-core machine, one run at a time)")
+    ax.set_ylabel("relative error of the mid-span deflection vs FEM")
+    ax.set_title("Clamped beam (seed 000, 4.2): accuracy against cost")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "accuracy_cost.png"), dpi=110)
+    print("wrote", os.path.join(a.out, "accuracy_cost.csv"), "and accuracy_cost.png")
+
+
+if __name__ == "__main__":
+    main()
