@@ -275,6 +275,24 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         std::cout << "    damage: " << rec.brokenBonds << " bond(s) broken, " << rec.breakRounds
                   << " re-equilibration(s), " << rec.detached.size() << " particle(s) detached\n";
     }
+    if (scene.solver.stabilityCheck) {
+      const int neg = evaluator->negativePivots(*x);
+      if (neg != 0) {
+        ok = false;
+        std::ostringstream s;
+        const double previous = res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0;
+        if (neg > 0)
+          s << "loss of stability: the equilibrium found at load factor " << lambda << " is unstable (the tangent has "
+            << neg << " negative pivot(s)): the path passed a bifurcation or limit point between load factors "
+            << previous << " and " << lambda << "; the last stable state is written";
+        else
+          s << "stability check impossible at load factor " << lambda << ": the tangent is not symmetric or its LDL^T failed";
+        res.failure = s.str();
+        lambda = previous;
+        evaluator->setLoadFactor(lambda);
+        break;
+      }
+    }
     Thyra::copy(*xConverged, xPrevious.ptr());
     Thyra::copy(*x, xConverged.ptr());
     lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);

@@ -25,6 +25,7 @@ Checks:
 """
 import argparse
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -68,6 +69,10 @@ def main():
     ap.add_argument("--probe", nargs=4, action="append", default=[])
     ap.add_argument("--normalised-by")
     ap.add_argument("--expect-from-scene")
+    ap.add_argument("--last-load-factor", nargs=2, type=float,
+                    help="the last (failing) step's load factor lies in [LO, HI]")
+    ap.add_argument("--hydrostatic-curve", nargs=5, metavar=("PROBE", "X0", "TRACTION", "LAMBDA_PLUS_MU", "RTOL"),
+                    help="probe PROBE at reference x = X0 follows u = (x - 1) X0 with 2(lambda+mu) ln(x)/x = load factor * TRACTION")
     ap.add_argument("--floor", type=float, default=FLOOR,
                     help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
@@ -107,6 +112,30 @@ def main():
             if "nan" in f.read().lower():
                 fail("the written state contains NaN")
         print(f"stopped as expected: {s['failure']}")
+    if a.last_load_factor or a.hydrostatic_curve:
+        with open(os.path.join(a.out, "summary.json")) as f:
+            s = json.load(f)
+        if a.last_load_factor:
+            lf = s["steps"][-1]["load_factor"]
+            print(f"last step at load factor {lf}")
+            if not a.last_load_factor[0] <= lf <= a.last_load_factor[1]:
+                fail(f"last load factor {lf} outside {a.last_load_factor}")
+        if a.hydrostatic_curve:
+            name, x0, t, lm, rtol = a.hydrostatic_curve
+            x0, t, lm, rtol = float(x0), float(t), float(lm), float(rtol)
+            worst = 0.0
+            for h in s["probes"][name]:
+                p = h["load_factor"] * t
+                x = 1.0
+                for _ in range(100):  # Newton on 2 (lambda+mu) ln(x)/x = p, stable branch
+                    g = 2 * lm * math.log(x) / x - p
+                    dg = 2 * lm * (1 - math.log(x)) / x ** 2
+                    x -= g / dg
+                ref = (x - 1) * x0
+                worst = max(worst, abs(h["displacement"][0] - ref) / abs(ref))
+            print(f"hydrostatic curve: largest relative deviation {worst:.4f} over {len(s['probes'][name])} steps")
+            if worst > rtol:
+                fail(f"deviation {worst} from the analytic curve exceeds {rtol}")
     if a.no_output:
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):

@@ -4,6 +4,8 @@
 #include <Thyra_DefaultSpmdVectorSpace.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -434,6 +436,67 @@ std::vector<double> PeridynamicEvaluator::ownedDisplacements(const Thyra::Vector
 
 std::vector<ParticleOutput> PeridynamicEvaluator::ownedOutputs(const Thyra::VectorBase<double>& x) const {
   return model_->outputs(localDisplacements(x));
+}
+
+}  // namespace perinox
+
+namespace perinox {
+
+int PeridynamicEvaluator::negativePivots(const Thyra::VectorBase<double>& x) const {
+  auto Wop = create_W_op();
+  auto in = createInArgs();
+  in.set_x(Teuchos::rcpFromRef(x));
+  auto out = createOutArgs();
+  out.set_W_op(Wop);
+  evalModel(in, out);
+  auto W = Teuchos::rcp_dynamic_cast<const TCrsMatrix>(TOE::getConstTpetraOperator(Wop), true);
+  // Gather every row on rank 0.
+  std::vector<GO> mine;
+  if (comm_->getRank() == 0)
+    for (long long g = 0; g < numFree_; ++g) mine.push_back(g);
+  auto rootMap = Teuchos::rcp(new TMap(numFree_, Teuchos::ArrayView<const GO>(mine), 0, comm_));
+  Tpetra::Import<LO, GO> imp(ownedFree_, rootMap);
+  TCrsMatrix G(rootMap, 0);
+  G.doImport(*W, imp, Tpetra::INSERT);
+  G.fillComplete(rootMap, rootMap);
+  int result = 0;
+  if (comm_->getRank() == 0) {
+    std::vector<Eigen::Triplet<double>> t;
+    const auto n = static_cast<long long>(numFree_);
+    Teuchos::Array<GO> cols;
+    Teuchos::Array<double> vals;
+    double maxAbs = 0;
+    for (LO r = 0; r < static_cast<LO>(n); ++r) {
+      const GO gr = rootMap->getGlobalElement(r);
+      const size_t nnz = G.getNumEntriesInGlobalRow(gr);
+      cols.resize(nnz);
+      vals.resize(nnz);
+      size_t got = 0;
+      G.getGlobalRowCopy(gr, cols(), vals(), got);
+      for (size_t k = 0; k < got; ++k) {
+        t.emplace_back(static_cast<int>(gr), static_cast<int>(cols[k]), vals[k]);
+        maxAbs = std::max(maxAbs, std::abs(vals[k]));
+      }
+    }
+    Eigen::SparseMatrix<double> A(static_cast<int>(n), static_cast<int>(n));
+    A.setFromTriplets(t.begin(), t.end());
+    Eigen::SparseMatrix<double> At = A.transpose();
+    Eigen::SparseMatrix<double> diff = A - At;
+    const double asym = diff.nonZeros() ? diff.coeffs().cwiseAbs().maxCoeff() : 0.0;
+    if (asym > 1e-8 * maxAbs) {
+      result = -1;
+    } else {
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+      if (ldlt.info() != Eigen::Success) {
+        result = -1;
+      } else {
+        const auto d = ldlt.vectorD();
+        for (int i = 0; i < d.size(); ++i) result += d[i] < 0;
+      }
+    }
+  }
+  Teuchos::broadcast(*comm_, 0, Teuchos::outArg(result));
+  return result;
 }
 
 }  // namespace perinox

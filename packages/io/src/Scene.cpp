@@ -152,6 +152,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps)");
   so.set("Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one");
   so.set("Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables");
+  so.set("Stability Check", false, "after each converged step, count negative pivots of the tangent (serial LDL^T on rank 0) and stop with a diagnosis when the equilibrium is unstable");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
   so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
@@ -760,6 +761,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   if (s.maxCutbacks < 0) fail(file, "'Solver/Max Cutbacks' must be >= 0");
   s.verbosity = so.get<int>("Verbosity");
   s.predictor = so.get<bool>("Predictor");
+  s.stabilityCheck = so.get<bool>("Stability Check");
   s.floorFactor = so.get<double>("Round-off Floor Factor");
   if (!(s.floorFactor >= 0)) fail(file, "'Solver/Round-off Floor Factor' must be >= 0");
   s.linearSolverName = so.get<std::string>("Linear Solver Preset");

@@ -65,6 +65,12 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// global, per component.
   std::vector<double> reactionOn(const Thyra::VectorBase<double>& x, const std::vector<int>& particles) const;
 
+  // --- stability ---
+  /// Number of negative pivots of the tangent at x (its inertia, by Sylvester's law), from a
+  /// sparse LDL^T of W gathered on rank 0 (Eigen). A diagnostic for symmetric tangents: memory
+  /// and time are those of a serial factorisation. Returns -1 if W is not symmetric to 1e-8.
+  int negativePivots(const Thyra::VectorBase<double>& x) const;
+
   // --- damage (seed 000 Fig. 8) ---
   struct BreakReport {
     long long brokenBonds = 0;             // bonds broken now (global)
