@@ -310,7 +310,12 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << "\n";
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
-    if (increment < 1.0 / N && nr.iterations <= 6) increment = std::min(1.0 / N, 2 * increment);
+    if (scene.solver.adaptive) {
+      // Adaptive stepping: grow after easy steps, up to Max Increment (cut-backs shrink it).
+      if (nr.iterations <= scene.solver.easyIterations) increment = std::min(scene.solver.maxIncrement, 1.5 * increment);
+    } else if (increment < 1.0 / N && nr.iterations <= 6) {
+      increment = std::min(1.0 / N, 2 * increment);
+    }
   }
   res.converged = ok;
 

@@ -147,7 +147,10 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Load Steps", 10, "equal load increments to load factor 1");
   so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
   so.set("Max Newton Iterations", 25, "per load step");
-  so.set("Line Search", "Full Step", "Full Step, Backtrack or Polynomial");
+  so.set("Line Search", "Full Step", "globalisation: Full Step, Backtrack or Polynomial (NOX line searches)");
+  so.set("Adaptive Steps", false, "grow the load increment by 1.5 after steps needing at most 'Easy Iterations' Newton iterations (up to 'Max Increment'); cut-backs still halve it");
+  so.set("Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations");
+  so.set("Max Increment", 0.25, "adaptive stepping: largest load increment");
   so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops");
   so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps)");
   so.set("Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one");
@@ -750,8 +753,14 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   s.maxIterations = so.get<int>("Max Newton Iterations");
   if (s.maxIterations < 1) fail(file, "'Solver/Max Newton Iterations' must be at least 1");
   s.lineSearch = so.get<std::string>("Line Search");
+  if (s.lineSearch == "Trust Region")
+    fail(file, "'Solver/Line Search' = Trust Region is not available: NOX's trust-region solvers crash on the Thyra group of this Trilinos build (docs/trilinos-notes.md); use Backtrack or Polynomial");
   if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial")
     fail(file, "'Solver/Line Search' must be Full Step, Backtrack or Polynomial");
+  s.adaptive = so.get<bool>("Adaptive Steps");
+  s.easyIterations = so.get<int>("Easy Iterations");
+  s.maxIncrement = so.get<double>("Max Increment");
+  if (!(s.maxIncrement > 0 && s.maxIncrement <= 1)) fail(file, "'Solver/Max Increment' must be in (0, 1]");
   s.maxCutbacks = so.get<int>("Max Cutbacks");
   s.maxTotalSteps = so.get<int>("Max Total Steps");
   if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;

@@ -30,6 +30,10 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
   NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver,
                                           NOX::StatusTest::CheckType) override {
     const auto& grp = solver.getSolutionGroup();
+    if (!grp.isF()) {  // some NOX solvers check before evaluating F
+      status_ = NOX::StatusTest::Unevaluated;
+      return status_;
+    }
     const double normF = grp.getNormF();
     double scale = ev_.externalForceNorm();
     reaction_ = false;
@@ -126,6 +130,8 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
     if (reason.find("factorization failed") != std::string::npos)
       reason += " (the tangent is singular: an unstable or unconstrained mode)";
     result.failure = "linear solver error: " + reason;
+  } catch (const char* e) {  // NOX throws string literals in places
+    result.failure = std::string("nonlinear solver error: ") + e;
   }
   result.residuals = residualTest->history();
   result.reactionNormalised = residualTest->reactionNormalised();

@@ -48,6 +48,9 @@ struct SolverSettings {
   int maxTotalSteps = 200;           // including reduced steps
   double minIncrement = 1e-6;        // fraction of the nominal increment
   bool predictor = true;
+  bool adaptive = false;             // grow increments after easy steps
+  int easyIterations = 4;
+  double maxIncrement = 0.25;
   bool stabilityCheck = false;       // negative pivots of the tangent after each step
   double floorFactor = 2.0;          // see NewtonOptions::floorFactor             // extrapolate the previous increment to start each step
   int verbosity = 0;
