@@ -55,7 +55,7 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
     if (d.fictitious[p]) continue;
     Eigen::VectorXd ur(D), u(D);
     for (int c = 0; c < D; ++c) {
-      ur[c] = (ref.H.row(c) * (d.X[p] - ref.center))(0);
+      ur[c] = ref.displacement(d.X[p], c);
       u[c] = uOwned[(p - ev.firstOwned()) * D + c];
     }
     if (ur.norm() <= 1e-14 * d.dx) continue;

@@ -72,8 +72,13 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   const long long n = P.disc.size();
   begin_ = partitionBegin(n, comm_->getSize(), comm_->getRank());
   end_ = partitionBegin(n, comm_->getSize(), comm_->getRank() + 1);
-  model_ = std::make_unique<Model>(P.material, localParticles(P.disc, begin_, end_));
-  if (P.correspondence) model_->enableCorrespondence();
+  LocalParticles lp = localParticles(P.disc, begin_, end_);
+  if (!P.modulusScale.empty())
+    for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
+  model_ = std::make_unique<Model>(P.material, std::move(lp));
+  if (P.stressPoints) model_->enableStressPoints();
+  else if (P.correspondence) model_->enableCorrespondence();
+  if (P.control) model_->enableControl(P.controlSpec);
   if (P.stabilization) model_->enableStabilization(P.stab);
   if (P.damage) model_->enableDamage(P.damageSpec);
   // Stiffness scale for frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows

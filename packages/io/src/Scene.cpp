@@ -120,9 +120,15 @@ Teuchos::RCP<ParameterList> buildSchema() {
   m.set("Plane", "Plane Strain", "2D: Plane Strain or Plane Stress");
   m.set("Young's Modulus", 0.0, "E > 0, in the scene's stress units");
   m.set("Poisson's Ratio", 0.0, "-1 < nu < 0.5");
+  m.set("Modulus Field", "Uniform", "Uniform, or Seed001 Bar: E(x) of seed 001 eq. 18 (E on the left half, softer to the right)");
+  m.set("Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20");
+  m.set("Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)");
+  m.set("Field Length", 1.0, "Seed001 Bar: L_tot (x measured from 0)");
   auto& mo = s->sublist("Model", false, "effects");
   mo.set("Stabilization", "None", "None or Silling");
   mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
+  mo.set("Zero-Energy Control", "None", "None, Springs (C1), Average Displacement (C2) or Stress Points (seed 001; 1D for now)");
+  mo.set("Control Constant", -1.0, "C1 or C2; negative: seed 001 Table 1 value for the particle count (n = 100, 200, 500, 1000)");
   auto& dm = s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps");
   dm.set("Enabled", false, "turn the damage effect on");
   dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
@@ -134,7 +140,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   s->sublist("Loads", false, "named loads");
   s->sublist("Probes", false, "named probes written per load step");
   auto& r = s->sublist("Reference", false, "analytic reference for errors");
-  r.set("Type", "None", "None, Hydrostatic Hencky, Uniform Stretch or Affine");
+  r.set("Type", "None", "None, Hydrostatic Hencky, Uniform Stretch, Affine or Seed001 Bar (eq. 19 with the Material's field parameters)");
   r.set("Gradient", arr<double>({}), "Affine: displacement gradient H, row-major dim x dim (u = H (X - Center))");
   r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
   r.set("Stretch", 1.0, "Uniform Stretch: l / l0");
@@ -566,6 +572,44 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     fail(file, "'Model/Stabilization' must be None or Silling, not '" + stab + "'");
   }
 
+  // --- heterogeneous modulus ---
+  const std::string field = ml.get<std::string>("Modulus Field");
+  const double fa = ml.get<double>("Field Alpha"), fb = ml.get<double>("Field Beta"), fl = ml.get<double>("Field Length");
+  if (field == "Seed001 Bar") {
+    if (!(fa > 0 && fb > 0 && fl > 0)) fail(file, "'Material/Field Alpha', 'Field Beta' and 'Field Length' must be positive");
+    problem->modulusScale.resize(d.size());
+    for (int p = 0; p < d.size(); ++p) {
+      const double xr = d.X[p][0] / fl;
+      problem->modulusScale[p] = xr <= 0.5 ? 1.0 : 1.0 / (1.0 + fb / (2 * fa) / std::sqrt(xr - 0.5));
+    }
+  } else if (field != "Uniform") {
+    fail(file, "'Material/Modulus Field' must be Uniform or Seed001 Bar");
+  }
+
+  // --- zero-energy controls (seed 001) ---
+  const std::string ctrl = mo.get<std::string>("Zero-Energy Control");
+  double cc = mo.get<double>("Control Constant");
+  if (ctrl == "Springs" || ctrl == "Average Displacement") {
+    if (cc < 0) {
+      // Seed 001 Table 1 (optimum C1, C2 for the 1D bar) by particle count.
+      const int nreal = static_cast<int>(std::count(d.fictitious.begin(), d.fictitious.end(), 0));
+      const std::map<int, std::pair<double, double>> table{{100, {0.8, 60}}, {200, {1.28, 150}}, {500, {2, 500}}, {1000, {3, 1750}}};
+      auto it = table.find(nreal);
+      if (it == table.end())
+        fail(file, "'Model/Control Constant' is not set and seed 001's Table 1 has no value for " + std::to_string(nreal) + " particles (only 100, 200, 500, 1000)");
+      cc = ctrl == "Springs" ? it->second.first : it->second.second;
+    }
+    problem->control = true;
+    problem->controlSpec.kind = ctrl == "Springs" ? ControlSpec::Kind::Springs : ControlSpec::Kind::AverageDisplacement;
+    problem->controlSpec.C = cc;
+  } else if (ctrl == "Stress Points") {
+    if (dim != 1) fail(file, "'Model/Zero-Energy Control' = Stress Points is implemented for 1D scenes only so far");
+    if (d.horizon > 1.5 * d.dx) fail(file, "stress points use nearest-neighbour families (seed 001): set 'Discretization/Horizon Factor' below 1.5");
+    problem->stressPoints = true;
+  } else if (ctrl != "None") {
+    fail(file, "'Model/Zero-Energy Control' must be None, Springs, Average Displacement or Stress Points");
+  }
+
   // --- damage ---
   const auto& dm = pl.sublist("Damage");
   sc.maxBreakRounds = dm.get<int>("Max Break Rounds");
@@ -729,8 +773,13 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       fail(file, "'Reference/Gradient' needs " + std::to_string(dim * dim) + " entries (row-major)");
     for (int a = 0; a < dim; ++a)
       for (int b = 0; b < dim; ++b) sc.reference.H(a, b) = g[a * dim + b];
+  } else if (sc.reference.type == "Seed001 Bar") {
+    if (dim != 1) fail(file, "'Reference/Type' Seed001 Bar needs a 1D scene");
+    sc.reference.barAlpha = fa;
+    sc.reference.barBeta = fb;
+    sc.reference.barLength = fl;
   } else if (sc.reference.type != "None") {
-    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky, Uniform Stretch or Affine");
+    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky, Uniform Stretch, Affine or Seed001 Bar");
   }
   if (sc.reference.type == "Hydrostatic Hencky" || sc.reference.type == "Uniform Stretch")
     sc.reference.H = (sc.reference.stretch - 1.0) * Eigen::Matrix3d::Identity();

@@ -1,5 +1,7 @@
 #pragma once
 // The force-state effects. Each is one kernel; the model holds only the ones a scene enables.
+#include <stdexcept>
+
 #include "perinox/model/Model.hpp"
 
 namespace perinox {
@@ -10,11 +12,43 @@ template <int D>
 class CorrespondenceEffect final : public ForceEffect<D> {
  public:
   explicit CorrespondenceEffect(const Material& m) : material_(m) {}
+  void prepare(const LocalParticles& p) override { scale_ = p.modulusScale; }
   const char* name() const override { return "correspondence"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
 
  private:
   const Material& material_;
+  std::vector<double> scale_;
+};
+
+/// Springs (C1) or average displacement state (C2) supplementary forces.
+template <int D>
+class ControlEffect final : public ForceEffect<D> {
+ public:
+  explicit ControlEffect(const ControlSpec& c) : spec_(c) {}
+  const char* name() const override {
+    return spec_.kind == ControlSpec::Kind::Springs ? "springs control" : "average displacement state control";
+  }
+  void addForces(BondWork<D>& w, bool tangent) const override;
+
+ private:
+  ControlSpec spec_;
+};
+
+/// Stress-point correspondence (seed 001, section 3): each particle's family is split among
+/// stress points; K_p, F_p and P_p are computed per stress point from its bonds, and a bond's
+/// force state is P_p K_p^-1 xi with p the stress point owning it. 1D: left and right bonds.
+template <int D>
+class StressPointEffect final : public ForceEffect<D> {
+ public:
+  explicit StressPointEffect(const Material& m) : material_(m) {}
+  const char* name() const override { return "stress-point correspondence"; }
+  void prepare(const LocalParticles& p) override { scale_ = p.modulusScale; }
+  void addForces(BondWork<D>& w, bool tangent) const override;
+
+ private:
+  const Material& material_;
+  std::vector<double> scale_;
 };
 
 /// Silling's stabilisation: T_z = (G C / w0_i) (Y - F xi), w0_i = sum_j V_j / V_i.

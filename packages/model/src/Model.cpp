@@ -37,6 +37,8 @@ struct Model::Impl {
   virtual std::vector<ParticleOutput> outputs(const Model& m, const std::vector<double>& u) const = 0;
   virtual void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) = 0;
   virtual void setDamage(const DamageSpec* d) = 0;
+  virtual void addControl(const ControlSpec& c) = 0;
+  virtual void addStressPoints(const Material& m) = 0;
   virtual std::vector<std::string> names() const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
 };
@@ -52,6 +54,11 @@ struct ImplD final : Model::Impl {
 
   void setDamage(const DamageSpec* d) override {
     if (d) damage = *d;
+  }
+  void addControl(const ControlSpec& c) override { effects.push_back(std::make_unique<ControlEffect<D>>(c)); }
+  void addStressPoints(const Material& m) override {
+    if (D != 1) throw std::invalid_argument("stress points are implemented for 1D models only (2D/3D arrangements are not yet available)");
+    effects.push_back(std::make_unique<StressPointEffect<D>>(m));
   }
 
   /// Bond softening applied to the summed force state of every effect:
@@ -208,6 +215,16 @@ Model::Model(const MaterialSpec& material, LocalParticles particles)
   for (int i = 0; i < particles_.numOwned; ++i)
     for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q)
       familyVolume0_[i] += particles_.volume[particles_.famIndex[q]];
+}
+
+void Model::enableControl(const ControlSpec& c) {
+  impl_->addControl(c);
+  impl_->prepare(particles_);
+}
+
+void Model::enableStressPoints() {
+  impl_->addStressPoints(material_);
+  impl_->prepare(particles_);
 }
 
 void Model::enableDamage(const DamageSpec& d) {

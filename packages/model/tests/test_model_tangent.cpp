@@ -336,3 +336,83 @@ TEST(Model, BreakingIsPermanentAndDamageIndexCounts) {
   ASSERT_EQ(sing.size(), 1u);
   EXPECT_EQ(sing[0], n - 1);
 }
+
+namespace {
+/// Max relative difference between the analytic element tangent and central differences, and
+/// the relative asymmetry, for a model at a random state.
+std::pair<double, double> tangentErrors(const Model& model, const Discretization& d, const std::vector<double>& u) {
+  const int n = d.size(), D = d.dim;
+  DenseSink s(D, n);
+  model.evaluate(u, s, true);
+  const double h = 1e-6 * d.dx;
+  Eigen::MatrixXd Kfd(n * D, n * D);
+  for (int k = 0; k < n * D; ++k) {
+    auto up = u, um = u;
+    up[k] += h;
+    um[k] -= h;
+    DenseSink sp(D, n), sm(D, n);
+    model.evaluate(up, sp, false);
+    model.evaluate(um, sm, false);
+    Kfd.col(k) = (sp.r - sm.r) / (2 * h);
+  }
+  const double scale = s.K.cwiseAbs().maxCoeff();
+  return {(s.K - Kfd).cwiseAbs().maxCoeff() / scale, (s.K - s.K.transpose()).cwiseAbs().maxCoeff() / scale};
+}
+}  // namespace
+
+// Supplementary-force controls (seed 001 eqs 7-8): tangents against finite differences. The
+// springs derive from an energy (symmetric); the average displacement state does not.
+TEST(Model, ControlTangentsMatchFiniteDifferences) {
+  for (int dim : {1, 2, 3}) {
+    Discretization d = smallLattice(dim, 2.015, dim == 1 ? 10 : (dim == 2 ? 7 : 5));
+    const auto u = randomDisplacement(d.size(), dim, 0.02 * d.dx, 5);
+    for (auto kind : {ControlSpec::Kind::Springs, ControlSpec::Kind::AverageDisplacement}) {
+      auto model = makeModel(d, material(dim), 0.0);
+      model->enableControl(ControlSpec{kind, 3.0e9});
+      const auto [err, asym] = tangentErrors(*model, d, u);
+      EXPECT_LT(err, 1e-6) << "dim " << dim;
+      if (kind == ControlSpec::Kind::Springs) EXPECT_LT(asym, 1e-10);
+    }
+  }
+}
+
+// Stress points in 1D (seed 001, 3.1), with a variable modulus: tangent against finite
+// differences and symmetric (energy-derived); and the interior equation of a uniform bar at
+// small strain is the three-point stencil u_{i-1} - 2 u_i + u_{i+1} = 0 (seed 001 eq. 12): a
+// linear field is an equilibrium while the no-control scheme's zero-energy mode is not.
+TEST(Model, StressPoints1D) {
+  Discretization d = smallLattice(1, 1.015, 12);
+  MaterialSpec m = material(1);
+  m.kind = MaterialKind::SmallStrain;
+  auto lp = localParticles(d, 0, d.size());
+  for (int i = 0; i < d.size(); ++i) lp.modulusScale.push_back(1.0 + 0.5 * std::sin(3.0 * i));
+  Model model(m, lp);
+  model.enableStressPoints();
+  const auto u = randomDisplacement(d.size(), 1, 0.02 * d.dx, 9);
+  const auto [err, asym] = tangentErrors(model, d, u);
+  EXPECT_LT(err, 1e-6);
+  EXPECT_LT(asym, 1e-10);
+
+  Model uniform(m, localParticles(d, 0, d.size()));
+  uniform.enableStressPoints();
+  Model plain(m, localParticles(d, 0, d.size()));
+  plain.enableCorrespondence();
+  std::vector<double> zigzag(d.size()), linear(d.size());
+  for (int i = 0; i < d.size(); ++i) {
+    zigzag[i] = (i % 2 ? 1e-3 : -1e-3) * d.dx;
+    linear[i] = 1e-3 * d.X[i][0];
+  }
+  DenseSink zs(1, d.size()), zp(1, d.size()), ls(1, d.size());
+  uniform.evaluate(zigzag, zs, false);
+  plain.evaluate(zigzag, zp, false);
+  uniform.evaluate(linear, ls, false);
+  double maxZs = 0, maxZp = 0, maxLs = 0;
+  for (int i = 2; i < d.size() - 2; ++i) {  // interior: both neighbours have two stress points
+    maxZs = std::max(maxZs, std::abs(zs.r[i]));
+    maxZp = std::max(maxZp, std::abs(zp.r[i]));
+    maxLs = std::max(maxLs, std::abs(ls.r[i]));
+  }
+  EXPECT_GT(maxZs, 0.0);
+  EXPECT_LT(maxZp, 1e-12 * maxZs) << "no control: the zigzag is a zero-energy mode";
+  EXPECT_LT(maxLs, 1e-12 * maxZs) << "stress points: a linear field is in equilibrium";
+}

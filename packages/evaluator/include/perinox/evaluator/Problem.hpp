@@ -20,6 +20,10 @@ struct ProblemSpec {
   StabilizationSpec stab;
   bool damage = false;
   DamageSpec damageSpec;
+  bool stressPoints = false;            // replaces the plain correspondence force state
+  bool control = false;
+  ControlSpec controlSpec;
+  std::vector<double> modulusScale;     // per particle E_i / E; empty for a uniform material
   // Loading at load factor 1 (scaled by the load factor lambda):
   std::vector<std::uint8_t> fixedMask;  // per particle: bit c set when component c is prescribed
   std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1

@@ -5,6 +5,7 @@
 // into a ProblemSpec plus solver, probe and output settings.
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -33,6 +34,16 @@ struct ReferenceDef {
   double stretch = 1.0;          // x = l / l0 (Hydrostatic Hencky, Uniform Stretch)
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   Vec3 center = Vec3::Zero();
+  double barAlpha = 0, barBeta = 0, barLength = 1;  // Seed001 Bar: u(x) of seed 001 eq. 19
+
+  /// The reference displacement at X (component c).
+  double displacement(const Vec3& X, int c) const {
+    if (type == "Seed001 Bar") {
+      const double xr = X[0] / barLength;
+      return barAlpha * X[0] + (xr > 0.5 ? barBeta * barLength * std::sqrt(xr - 0.5) : 0.0);
+    }
+    return (H.row(c) * (X - center))(0);
+  }
 };
 
 struct SolverSettings {

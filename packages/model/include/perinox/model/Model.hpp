@@ -44,6 +44,7 @@ struct LocalParticles {
   // Families of owned particles only, with local neighbour ids (CSR). Broken bonds are removed.
   std::vector<std::int64_t> famOffset;
   std::vector<int> famIndex;
+  std::vector<double> modulusScale;  // per local particle (E_i / E); empty for a uniform material
   int size() const { return static_cast<int>(X.size()); }
 };
 
@@ -94,6 +95,13 @@ struct StabilizationSpec {
   double C = 0.0;           // micromodulus / horizon (see micromodulusC)
 };
 
+/// Supplementary-force controls of zero-energy modes (Breitenfeld et al. 2014; seed 001 eqs 7-8):
+/// springs T_a = C w (u_j - u_i); average displacement state T_a = C sum_l w (u_l - u_i) V_l.
+struct ControlSpec {
+  enum class Kind { Springs, AverageDisplacement } kind = Kind::Springs;
+  double C = 0.0;
+};
+
 /// Bond softening of the implicit damage model (seed 000, eqs 45-54):
 /// T_s(s) = 1 below sMin, 1/2 (1 - tanh(beta (sMin + sCr - 2 s) / (sMin - sCr))) in the band,
 /// 0 from sCr on. Bonds with s >= sCr are broken for good after a converged load step.
@@ -139,6 +147,12 @@ class Model {
 
   void enableCorrespondence();
   void enableStabilization(const StabilizationSpec& s);
+  /// Supplementary-force control (springs or average displacement state).
+  void enableControl(const ControlSpec& c);
+  /// Stress points (seed 001): the correspondence force state computed per stress point from
+  /// the bonds it owns. Implemented for 1D (left and right stress points); replaces the plain
+  /// correspondence effect.
+  void enableStressPoints();
   /// Softens every bond force (of all effects) by T_s(s); see DamageSpec.
   void enableDamage(const DamageSpec& d);
   bool damageEnabled() const { return damage_.has_value(); }
