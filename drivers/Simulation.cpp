@@ -3,6 +3,7 @@
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Thyra_VectorStdOps.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -298,7 +299,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);
     const auto u = evaluator->ownedDisplacements(*x);
     for (std::size_t k = 0; k < scene.probes.size(); ++k)
-      res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
+      if (scene.probes[k].quantity != "Profile")
+        res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
     if (rank == 0 && !options.quiet)
       std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
                 << (scene.solver.method == "ADR" ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
@@ -342,6 +344,22 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         fs::remove(part);
       }
     }
+    // Profiles: the final state of every particle of a region (e.g. u_x along an axis).
+    for (const auto& probe : scene.probes) {
+      if (probe.quantity != "Profile") continue;
+      std::ifstream in(staging + "/fields.csv");
+      std::ostringstream out;
+      std::string line;
+      std::getline(in, line);
+      out << line << '\n';
+      while (std::getline(in, line)) {
+        const long long id = std::stoll(line.substr(0, line.find(',')));
+        if (std::binary_search(probe.particles.begin(), probe.particles.end(), static_cast<int>(id))) out << line << '\n';
+      }
+      std::string fname = probe.name;
+      std::replace(fname.begin(), fname.end(), ' ', '_');
+      writeFileAtomic(staging + "/profile_" + fname + ".csv", out.str());
+    }
     using nlohmann::json;
     json j;
     j["scene"] = scene.file;
@@ -383,6 +401,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
     json probes = json::object();
     for (std::size_t k = 0; k < res.probes.size(); ++k) {
+      if (scene.probes[k].quantity == "Profile") continue;
       json list = json::array();
       const std::string key = scene.probes[k].quantity == "Reaction" ? "reaction" : "displacement";
       for (const auto& [lf, v] : res.probes[k].second) list.push_back({{"load_factor", lf}, {key, v}});

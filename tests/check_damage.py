@@ -59,6 +59,19 @@ def main():
                 other = pos.get((round(mx, 6), round(my, 6)))
                 if other is None or abs(other - phi) > 1e-9:
                     fail(f"damage not symmetric: phi({x},{y}) = {phi}, phi({mx},{my}) = {other}")
+    # The u_x profile along the horizontal axis (Fig. 32) is odd in x: u_x(-x) = -u_x(x).
+    prof = os.path.join(a.dirs[0], "profile_horizontal_axis.csv")
+    if os.path.exists(prof):
+        with open(prof) as f:
+            pts = {(round(float(r["x"]), 6), round(float(r["y"]), 6)): float(r["ux"]) for r in csv.DictReader(f)}
+        scale = max(abs(v) for v in pts.values())
+        for (x, y), ux in pts.items():
+            other = pts.get((round(-x, 6), y))
+            if other is None or abs(other + ux) > 1e-8 * scale:
+                fail(f"u_x profile not antisymmetric at x = {x}: {ux} vs {other}")
+        print(f"u_x profile along the horizontal axis: {len(pts)} particles, antisymmetric")
+    elif a.symmetric:
+        fail("no profile_horizontal_axis.csv written")
     for d in a.dirs[1:]:
         r2, s2 = load(d)
         if s2["broken_bonds_total"] != s["broken_bonds_total"]:

@@ -82,7 +82,7 @@ ParameterList loadTemplate() {
 ParameterList probeTemplate() {
   ParameterList p("probe");
   p.set("Region", "", "region to probe");
-  p.set("Quantity", "Displacement", "Displacement (mean over the region) or Reaction (sum of reaction forces)");
+  p.set("Quantity", "Displacement", "Displacement (mean over the region, per step), Reaction (sum of reaction forces, per step) or Profile (every particle of the region at the end, to profile_<name>.csv)");
   return p;
 }
 
@@ -751,8 +751,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     ProbeDef def;
     def.name = name;
     def.quantity = p.get<std::string>("Quantity");
-    if (def.quantity != "Displacement" && def.quantity != "Reaction")
-      fail(file, "'Probes/" + name + "/Quantity' must be Displacement or Reaction");
+    if (def.quantity != "Displacement" && def.quantity != "Reaction" && def.quantity != "Profile")
+      fail(file, "'Probes/" + name + "/Quantity' must be Displacement, Reaction or Profile");
     def.particles = region("Probes/" + name + "/Region", p.get<std::string>("Region"));
     sc.probes.push_back(def);
   }
