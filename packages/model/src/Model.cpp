@@ -142,7 +142,15 @@ struct ImplD final : Model::Impl {
       kinematics(p, u, i, w);
       const int m = w.m;
       if (tangent) w.tan.assign(static_cast<std::size_t>(m) * (m + 1), Mat::Zero());
-      for (const auto& e : effects) e->addForces(w, tangent);
+      try {
+        for (const auto& e : effects) e->addForces(w, tangent);
+      } catch (const EvaluationError& e) {
+        // Effects know local ids only; name the particle by its global id and position.
+        const long long g = p.globalId[i];
+        std::ostringstream msg;
+        msg << e.what() << " at particle " << g << " (X = " << p.X[i].head(D).transpose() << ")";
+        throw EvaluationError(msg.str(), g);
+      }
       if (damage) soften(*damage, w, tangent);
 
       const int n = m + 1;
@@ -191,7 +199,10 @@ struct ImplD final : Model::Impl {
       Eigen::Matrix3d s;
       out[i].F.setIdentity();
       out[i].F.template topLeftCorner<D, D>() = F;
-      if (!model.material().template cauchy<D>(F, s)) s.setConstant(std::nan(""));
+      // An output state is a converged one, where every F is valid; should one not be, write
+      // zero stress and flag it rather than a NaN.
+      out[i].valid = model.material().template cauchy<D>(F, s);
+      if (!out[i].valid) s.setZero();
       out[i].cauchy = s;
     }
     return out;

@@ -135,6 +135,7 @@ double micromodulusC(const MaterialSpec& m, double delta, double thickness);
 struct ParticleOutput {
   Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d cauchy = Eigen::Matrix3d::Zero();
+  bool valid = true;  // false if F was inverted (stress then written as zero)
 };
 
 /// The composed model. Effects are added once; effects a scene leaves off are never built.
