@@ -76,7 +76,7 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   if (!P.modulusScale.empty())
     for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
   model_ = std::make_unique<Model>(P.material, std::move(lp));
-  if (P.stressPoints) model_->enableStressPoints();
+  if (P.stressPoints) model_->enableStressPoints(P.stressPointSeed);
   else if (P.correspondence) model_->enableCorrespondence();
   if (P.control) model_->enableControl(P.controlSpec);
   if (P.stabilization) model_->enableStabilization(P.stab);

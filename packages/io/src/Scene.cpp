@@ -127,7 +127,8 @@ Teuchos::RCP<ParameterList> buildSchema() {
   auto& mo = s->sublist("Model", false, "effects");
   mo.set("Stabilization", "None", "None or Silling");
   mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
-  mo.set("Zero-Energy Control", "None", "None, Springs (C1), Average Displacement (C2) or Stress Points (seed 001; 1D for now)");
+  mo.set("Zero-Energy Control", "None", "None, Springs (C1), Average Displacement (C2) or Stress Points (seed 001; nearest-neighbour families)");
+  mo.set("Stress Point Seed", 2018, "seed of the stress-point arrangements (drawn per particle from its global id)");
   mo.set("Control Constant", -1.0, "C1 or C2; negative: seed 001 Table 1 value for the particle count (n = 100, 200, 500, 1000)");
   auto& dm = s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps");
   dm.set("Enabled", false, "turn the damage effect on");
@@ -603,9 +604,9 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     problem->controlSpec.kind = ctrl == "Springs" ? ControlSpec::Kind::Springs : ControlSpec::Kind::AverageDisplacement;
     problem->controlSpec.C = cc;
   } else if (ctrl == "Stress Points") {
-    if (dim != 1) fail(file, "'Model/Zero-Energy Control' = Stress Points is implemented for 1D scenes only so far");
     if (d.horizon > 1.5 * d.dx) fail(file, "stress points use nearest-neighbour families (seed 001): set 'Discretization/Horizon Factor' below 1.5");
     problem->stressPoints = true;
+    problem->stressPointSeed = static_cast<unsigned>(mo.get<int>("Stress Point Seed"));
   } else if (ctrl != "None") {
     fail(file, "'Model/Zero-Energy Control' must be None, Springs, Average Displacement or Stress Points");
   }

@@ -83,41 +83,61 @@ void ControlEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
 }
 
 template <int D>
+int StressPointEffect<D>::groups(const BondWork<D>& w, std::vector<int>& g) const {
+  g.assign(w.m, 0);
+  if (w.m != 2 * D) return 1;
+  // The arrangement bits of this particle, from a hash of its global id and the seed.
+  unsigned long long h = static_cast<unsigned long long>(globalId_[w.i]) * 0x9E3779B97F4A7C15ull ^ (seed_ * 0xBF58476D1CE4E5B9ull);
+  h ^= h >> 31;
+  h *= 0x94D049BB133111EBull;
+  h ^= h >> 29;
+  int seen = 0;
+  for (int l = 0; l < w.m; ++l) {
+    int axis = -1;
+    for (int a = 0; a < D; ++a)
+      if (std::abs(w.xi[l][a]) > 0.5 * w.xi[l].norm()) axis = a;
+    if (axis < 0) return g.assign(w.m, 0), 1;
+    const bool positive = w.xi[l][axis] > 0;
+    const bool bit = axis > 0 && ((h >> axis) & 1ull);
+    g[l] = positive != bit ? 1 : 0;
+    seen |= 1 << (2 * axis + positive);
+  }
+  if (seen != (1 << (2 * D)) - 1) return g.assign(w.m, 0), 1;  // not one bond per direction
+  return 2;
+}
+
+template <int D>
 void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   using Vec = typename BondWork<D>::Vec;
   using Mat = typename BondWork<D>::Mat;
-  if (D != 1) throw std::logic_error("stress points are implemented in 1D only");
-  // Two groups: bonds to the left (xi < 0) and to the right (xi > 0). A particle with bonds on
-  // one side only (a boundary) has one stress point holding them all.
-  for (int side = 0; side < 2; ++side) {
+  std::vector<int> grp;
+  const int ng = groups(w, grp);
+  const double sc = w.i < static_cast<int>(scale_.size()) ? scale_[w.i] : 1.0;
+  for (int p = 0; p < ng; ++p) {
     Mat K = Mat::Zero(), FK = Mat::Zero();
-    int count = 0;
     for (int l = 0; l < w.m; ++l) {
-      if ((w.xi[l][0] > 0) != (side == 1)) continue;
+      if (grp[l] != p) continue;
       K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
       FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
-      ++count;
     }
-    if (count == 0) continue;
     const Mat Kinv = K.inverse();
     const Mat F = FK * Kinv;
     Mat P;
     TangentD<D> A;
     const bool ok = tangent ? material_.template stressTangent<D>(F, P, A) : material_.template stress<D>(F, P);
     if (!ok) throw EvaluationError("stress-point deformation gradient is inverted or not finite", w.i);
-    const double sc = w.i < static_cast<int>(scale_.size()) ? scale_[w.i] : 1.0;
     P *= sc;
     A *= sc;
     Vec gsum = Vec::Zero();
     for (int l = 0; l < w.m; ++l) {
-      if ((w.xi[l][0] > 0) != (side == 1)) continue;
+      if (grp[l] != p) continue;
       const Vec h = Kinv * w.xi[l];
       w.t[l].noalias() += P * h;
       gsum += w.Vj[l] * h;
     }
     if (!tangent) continue;
     for (int j = 0; j < w.m; ++j) {
-      if ((w.xi[j][0] > 0) != (side == 1)) continue;
+      if (grp[j] != p) continue;
       const Vec hj = Kinv * w.xi[j];
       Eigen::Matrix<double, D, D * D> M;
       for (int a = 0; a < D; ++a) M.row(a) = hj.transpose() * A.template block<D, D * D>(a * D, 0);
@@ -126,7 +146,7 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
         if (k == 0) {
           gk = -gsum;
         } else {
-          if ((w.xi[k - 1][0] > 0) != (side == 1)) continue;
+          if (grp[k - 1] != p) continue;
           gk = w.Vj[k - 1] * (Kinv * w.xi[k - 1]);
         }
         for (int c = 0; c < D; ++c) w.dT(j, k).col(c).noalias() += M.template block<D, D>(0, c * D) * gk;

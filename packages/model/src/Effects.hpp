@@ -37,18 +37,30 @@ class ControlEffect final : public ForceEffect<D> {
 
 /// Stress-point correspondence (seed 001, section 3): each particle's family is split among
 /// stress points; K_p, F_p and P_p are computed per stress point from its bonds, and a bond's
-/// force state is P_p K_p^-1 xi with p the stress point owning it. 1D: left and right bonds.
+/// force state is P_p K_p^-1 xi with p the stress point owning it. Nearest-neighbour families:
+/// a particle with its complete family (2 D bonds along the axes) has two stress points, the
+/// first owning the bond towards -x and, for each further axis a, the bond towards -a or +a as
+/// the particle's arrangement bit b_a says (1D: left/right; 2D: two arrangements; 3D: four).
+/// The bits come from a hash of the global particle id, so they do not depend on the partition.
+/// Any other family (boundaries) has one stress point holding all bonds.
 template <int D>
 class StressPointEffect final : public ForceEffect<D> {
  public:
-  explicit StressPointEffect(const Material& m) : material_(m) {}
+  StressPointEffect(const Material& m, unsigned seed) : material_(m), seed_(seed) {}
   const char* name() const override { return "stress-point correspondence"; }
-  void prepare(const LocalParticles& p) override { scale_ = p.modulusScale; }
+  void prepare(const LocalParticles& p) override {
+    scale_ = p.modulusScale;
+    globalId_ = p.globalId;
+  }
   void addForces(BondWork<D>& w, bool tangent) const override;
+  /// Stress point (0 or 1) of each bond of w, or all 0 for a defective family; returns the count.
+  int groups(const BondWork<D>& w, std::vector<int>& g) const;
 
  private:
   const Material& material_;
+  unsigned seed_;
   std::vector<double> scale_;
+  std::vector<long long> globalId_;
 };
 
 /// Silling's stabilisation: T_z = (G C / w0_i) (Y - F xi), w0_i = sum_j V_j / V_i.

@@ -38,7 +38,7 @@ struct Model::Impl {
   virtual void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) = 0;
   virtual void setDamage(const DamageSpec* d) = 0;
   virtual void addControl(const ControlSpec& c) = 0;
-  virtual void addStressPoints(const Material& m) = 0;
+  virtual void addStressPoints(const Material& m, unsigned seed) = 0;
   virtual std::vector<std::string> names() const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
 };
@@ -56,9 +56,8 @@ struct ImplD final : Model::Impl {
     if (d) damage = *d;
   }
   void addControl(const ControlSpec& c) override { effects.push_back(std::make_unique<ControlEffect<D>>(c)); }
-  void addStressPoints(const Material& m) override {
-    if (D != 1) throw std::invalid_argument("stress points are implemented for 1D models only (2D/3D arrangements are not yet available)");
-    effects.push_back(std::make_unique<StressPointEffect<D>>(m));
+  void addStressPoints(const Material& m, unsigned seed) override {
+    effects.push_back(std::make_unique<StressPointEffect<D>>(m, seed));
   }
 
   /// Bond softening applied to the summed force state of every effect:
@@ -233,8 +232,8 @@ void Model::enableControl(const ControlSpec& c) {
   impl_->prepare(particles_);
 }
 
-void Model::enableStressPoints() {
-  impl_->addStressPoints(material_);
+void Model::enableStressPoints(unsigned seed) {
+  impl_->addStressPoints(material_, seed);
   impl_->prepare(particles_);
 }
 

@@ -389,3 +389,39 @@ TEST(Model, StressPoints1D) {
   EXPECT_LT(maxZp, 1e-12 * maxZs) << "no control: the zigzag is a zero-energy mode";
   EXPECT_LT(maxLs, 1e-12 * maxZs) << "stress points: a linear field is in equilibrium";
 }
+
+// Stress points in 2D and 3D (seed 001, 3.2): tangent against finite differences, symmetric
+// (energy-derived), and the patch test: an affine field gives zero force at every particle whose
+// neighbours all have complete families (every stress point then has K_p = V dx^2 I).
+TEST(Model, StressPoints2D3D) {
+  for (int dim : {2, 3}) {
+    Discretization d = smallLattice(dim, 1.015, dim == 2 ? 8 : 6);
+    MaterialSpec m = material(dim);
+    Model model(m, localParticles(d, 0, d.size()));
+    model.enableStressPoints(7);
+    const auto u = randomDisplacement(d.size(), dim, 0.02 * d.dx, 21);
+    const auto [err, asym] = tangentErrors(model, d, u);
+    EXPECT_LT(err, 1e-6) << "dim " << dim;
+    EXPECT_LT(asym, 1e-10) << "dim " << dim;
+
+    Eigen::Matrix3d H;
+    H << 0.02, -0.01, 0.005, 0.015, -0.03, 0.01, 0.0, 0.02, 0.01;
+    std::vector<double> ua(d.size() * dim);
+    for (int i = 0; i < d.size(); ++i)
+      for (int a = 0; a < dim; ++a) ua[i * dim + a] = (H.topLeftCorner(dim, 3) * d.X[i])[a];
+    DenseSink s(dim, d.size());
+    model.evaluate(ua, s, false);
+    double interior = 0, all = 0;
+    for (int i = 0; i < d.size(); ++i) {
+      bool inside = true;
+      for (int a = 0; a < dim; ++a)
+        inside = inside && d.X[i][a] > 1.9 * d.dx && d.X[i][a] < d.boxUpper[a] - 1.9 * d.dx;
+      for (int a = 0; a < dim; ++a) {
+        all = std::max(all, std::abs(s.r[i * dim + a]));
+        if (inside) interior = std::max(interior, std::abs(s.r[i * dim + a]));
+      }
+    }
+    ASSERT_GT(all, 0.0);
+    EXPECT_LT(interior, 1e-10 * all) << "dim " << dim;
+  }
+}

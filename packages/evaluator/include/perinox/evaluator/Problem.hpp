@@ -21,6 +21,7 @@ struct ProblemSpec {
   bool damage = false;
   DamageSpec damageSpec;
   bool stressPoints = false;            // replaces the plain correspondence force state
+  unsigned stressPointSeed = 2018;
   bool control = false;
   ControlSpec controlSpec;
   std::vector<double> modulusScale;     // per particle E_i / E; empty for a uniform material

@@ -151,9 +151,9 @@ class Model {
   /// Supplementary-force control (springs or average displacement state).
   void enableControl(const ControlSpec& c);
   /// Stress points (seed 001): the correspondence force state computed per stress point from
-  /// the bonds it owns. Implemented for 1D (left and right stress points); replaces the plain
-  /// correspondence effect.
-  void enableStressPoints();
+  /// the bonds it owns (nearest-neighbour families; arrangements drawn from the seed and the
+  /// global particle id). Replaces the plain correspondence effect.
+  void enableStressPoints(unsigned seed = 2018);
   /// Softens every bond force (of all effects) by T_s(s); see DamageSpec.
   void enableDamage(const DamageSpec& d);
   bool damageEnabled() const { return damage_.has_value(); }
