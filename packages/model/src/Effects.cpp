@@ -4,36 +4,55 @@
 
 namespace perinox {
 
+namespace {
+
+/// P(F) (and A = dP/dF when tangent), times a modulus scale; throws for an inverted F.
 template <int D>
-void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
-  using Mat = typename BondWork<D>::Mat;
-  Mat P;
-  TangentD<D> A;
-  const bool ok = tangent ? material_.template stressTangent<D>(w.F, P, A)
-                          : material_.template stress<D>(w.F, P);
+void piola(const Material& m, const MatD<D>& F, double scale, bool tangent, int particle, MatD<D>& P,
+           TangentD<D>& A) {
+  const bool ok = tangent ? m.template stressTangent<D>(F, P, A) : m.template stress<D>(F, P);
   if (!ok) {
     std::ostringstream s;
-    s << "deformation gradient is inverted or not finite (det F = " << w.F.determinant() << ")";
-    throw EvaluationError(s.str(), w.i);
+    s << "deformation gradient is inverted or not finite (det F = " << F.determinant() << ")";
+    throw EvaluationError(s.str(), particle);
   }
-  if (!scale_.empty()) {
-    P *= scale_[w.i];
-    if (tangent) A *= scale_[w.i];
+  if (scale != 1.0) {
+    P *= scale;
+    if (tangent) A *= scale;
   }
-  for (int j = 0; j < w.m; ++j) w.t[j].noalias() += P * w.h[j];
-  if (!tangent) return;
+}
+
+/// The correspondence force states of the bonds l with in(l) (one shape tensor K, one F):
+/// t_l += P h_l, and, with A, dT_j/du_k += (A : e_c (x) g_k) h_j for k = i and every member,
+/// where h_l = K^-1 xi_l, g_0 = -gsum = -sum V_l h_l and g_{1+l} = V_l h_l.
+template <int D, class In>
+void addPiolaForceStates(BondWork<D>& w, const MatD<D>& P, const TangentD<D>* A,
+                         const std::vector<typename BondWork<D>::Vec>& h,
+                         const typename BondWork<D>::Vec& gsum, In in) {
+  for (int l = 0; l < w.m; ++l)
+    if (in(l)) w.t[l].noalias() += P * h[l];
+  if (!A) return;
   // M_j(a, c*D+d) = sum_b A(a*D+b, c*D+d) h_j,b ; block(j,k)(a,c) = sum_d M_j(a, c*D+d) g_k,d.
   Eigen::Matrix<double, D, D * D> M;
   for (int j = 0; j < w.m; ++j) {
-    for (int a = 0; a < D; ++a)
-      M.row(a) = w.h[j].transpose() * A.template block<D, D * D>(a * D, 0);
+    if (!in(j)) continue;
+    for (int a = 0; a < D; ++a) M.row(a) = h[j].transpose() * A->template block<D, D * D>(a * D, 0);
     for (int k = 0; k <= w.m; ++k) {
-      const auto gk = w.g(k);
-      Mat& B = w.dT(j, k);
-      for (int c = 0; c < D; ++c)
-        B.col(c).noalias() += M.template block<D, D>(0, c * D) * gk;
+      if (k > 0 && !in(k - 1)) continue;
+      const typename BondWork<D>::Vec gk = k == 0 ? (-gsum).eval() : (w.Vj[k - 1] * h[k - 1]).eval();
+      for (int c = 0; c < D; ++c) w.dT(j, k).col(c).noalias() += M.template block<D, D>(0, c * D) * gk;
     }
   }
+}
+
+}  // namespace
+
+template <int D>
+void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
+  MatD<D> P;
+  TangentD<D> A;
+  piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], tangent, w.i, P, A);
+  addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, w.h, w.gsum, [](int) { return true; });
 }
 
 template <int D>
@@ -113,45 +132,26 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   std::vector<int> grp;
   const int ng = groups(w, grp);
   const double sc = w.i < static_cast<int>(scale_.size()) ? scale_[w.i] : 1.0;
+  std::vector<Vec> h(w.m);
   for (int p = 0; p < ng; ++p) {
+    const auto in = [&](int l) { return grp[l] == p; };
     Mat K = Mat::Zero(), FK = Mat::Zero();
     for (int l = 0; l < w.m; ++l) {
-      if (grp[l] != p) continue;
+      if (!in(l)) continue;
       K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
       FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
     }
     const Mat Kinv = K.inverse();
-    const Mat F = FK * Kinv;
+    Vec gsum = Vec::Zero();
+    for (int l = 0; l < w.m; ++l)
+      if (in(l)) {
+        h[l] = Kinv * w.xi[l];
+        gsum += w.Vj[l] * h[l];
+      }
     Mat P;
     TangentD<D> A;
-    const bool ok = tangent ? material_.template stressTangent<D>(F, P, A) : material_.template stress<D>(F, P);
-    if (!ok) throw EvaluationError("stress-point deformation gradient is inverted or not finite", w.i);
-    P *= sc;
-    A *= sc;
-    Vec gsum = Vec::Zero();
-    for (int l = 0; l < w.m; ++l) {
-      if (grp[l] != p) continue;
-      const Vec h = Kinv * w.xi[l];
-      w.t[l].noalias() += P * h;
-      gsum += w.Vj[l] * h;
-    }
-    if (!tangent) continue;
-    for (int j = 0; j < w.m; ++j) {
-      if (grp[j] != p) continue;
-      const Vec hj = Kinv * w.xi[j];
-      Eigen::Matrix<double, D, D * D> M;
-      for (int a = 0; a < D; ++a) M.row(a) = hj.transpose() * A.template block<D, D * D>(a * D, 0);
-      for (int k = 0; k <= w.m; ++k) {
-        Vec gk;
-        if (k == 0) {
-          gk = -gsum;
-        } else {
-          if (grp[k - 1] != p) continue;
-          gk = w.Vj[k - 1] * (Kinv * w.xi[k - 1]);
-        }
-        for (int c = 0; c < D; ++c) w.dT(j, k).col(c).noalias() += M.template block<D, D>(0, c * D) * gk;
-      }
-    }
+    piola<D>(material_, FK * Kinv, sc, tangent, w.i, P, A);
+    addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, h, gsum, in);
   }
 }
 
