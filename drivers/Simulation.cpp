@@ -121,8 +121,19 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
 
   // Everything that can reject the set-up happens before the output folder exists.
   auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
-  auto lows = buildLinearSolverFactory(Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver)), nranks);
-  evaluator->set_W_factory(lows);
+  const auto linearParams = Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver));
+  if (scene.solver.jacobian == "Assembled" || scene.solver.method != "Newton") {
+    evaluator->set_W_factory(buildLinearSolverFactory(linearParams, nranks));
+  } else {
+    // Matrix-free: Belos without a preconditioner of its own; the model builds the
+    // preconditioner from the matrix the scene names.
+    auto split = buildSplitLinearSolver(linearParams, nranks);
+    evaluator->set_W_factory(split.krylov);
+    evaluator->setJacobian(scene.solver.jacobian == "Matrix-Free" ? JacobianMode::MatrixFree : JacobianMode::JacobianFree,
+                           scene.solver.preconditionerMatrix == "Assembled" ? PreconditionerMatrix::Assembled
+                                                                            : PreconditionerMatrix::Neighbours,
+                           split.preconditioner, scene.solver.jfnkLambda);
+  }
   res.particles = scene.problem->disc.size();
   res.dofs = evaluator->numFreeDofs();
 
@@ -372,6 +383,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     j["wall_time_s"] = res.wallTime;
     j["effects"] = evaluator->model().effectNames();
     j["linear_solver"] = scene.solver.linearSolverName;
+    j["jacobian"] = scene.solver.jacobian;
+    if (scene.solver.jacobian != "Assembled") j["preconditioner_matrix"] = scene.solver.preconditionerMatrix;
+    j["matrix_bytes"] = evaluator->matrixBytes();
     j["method"] = scene.solver.method;
     j["tolerance"] = scene.solver.tolerance;
     json steps = json::array();

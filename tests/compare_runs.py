@@ -25,6 +25,8 @@ def main():
                     help="multiply the probes of every run but the first by this (unit changes)")
     ap.add_argument("--final-only", action="store_true",
                     help="compare only the final state (runs may take different load steps)")
+    ap.add_argument("--same-iterations", action="store_true",
+                    help="also require the same load steps and Newton iterations per step")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     ref = load(a.dirs[0])
@@ -46,6 +48,13 @@ def main():
                     sys.exit(1)
                 for x, y in zip(h[key], o[key]):
                     worst = max(worst, abs(x - a.scale * y) / scale)
+        if a.same_iterations:
+            its = [st["newton_iterations"] for st in ref["steps"]]
+            other_its = [st["newton_iterations"] for st in s["steps"]]
+            print(f"Newton iterations per step: {its} and {other_its}")
+            if its != other_its:
+                print(f"FAILED: Newton iterations differ in {d}")
+                sys.exit(1)
         print(f"{d}: ranks {s['ranks']}")
     print(f"largest relative difference {worst:.3e} (tolerance {a.rtol})")
     if worst > a.rtol:

@@ -1,6 +1,7 @@
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 
 #include <Teuchos_CommHelpers.hpp>
+#include <Thyra_DefaultLinearOpSource.hpp>
 #include <Thyra_DefaultSpmdVectorSpace.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
@@ -64,6 +65,89 @@ class TpetraSink final : public ElementSink {
 };
 
 }  // namespace
+
+/// The analytic matrix-free Jacobian: W v = (df_int/du) v from the linearised kernels at the
+/// state of the last evaluation with W_op (its displacements are kept; nothing is assembled).
+class JacobianOperator final : public Tpetra::Operator<double, LO, GO, Node> {
+ public:
+  explicit JacobianOperator(const PeridynamicEvaluator& ev) : ev_(ev) {}
+  Teuchos::RCP<const TMap> getDomainMap() const override { return ev_.ownedFree_; }
+  Teuchos::RCP<const TMap> getRangeMap() const override { return ev_.ownedFree_; }
+  bool hasTransposeApply() const override { return false; }
+  void setState(std::vector<double> u) { u_ = std::move(u); }
+  void apply(const Tpetra::MultiVector<double, LO, GO, Node>& X, Tpetra::MultiVector<double, LO, GO, Node>& Y,
+             Teuchos::ETransp mode, double alpha, double beta) const override {
+    TEUCHOS_TEST_FOR_EXCEPTION(mode != Teuchos::NO_TRANS, std::logic_error,
+                               "the matrix-free Jacobian has no transpose product");
+    TEUCHOS_TEST_FOR_EXCEPTION(u_.empty(), std::logic_error, "the matrix-free Jacobian was applied before evaluation");
+    const size_t n = X.getLocalLength();
+    std::vector<double> y(n);
+    for (size_t k = 0; k < X.getNumVectors(); ++k) {
+      auto xd = X.getData(k);
+      ev_.applyJacobian(u_, xd.getRawPtr(), y.data());
+      auto yd = Y.getDataNonConst(k);
+      for (size_t r = 0; r < n; ++r) yd[r] = (beta == 0.0 ? 0.0 : beta * yd[r]) + alpha * y[r];
+    }
+  }
+
+ private:
+  const PeridynamicEvaluator& ev_;
+  std::vector<double> u_;
+};
+
+/// The Jacobian-free product: W v = (f(x + h v) - f(x)) / h, one residual evaluation per
+/// product. NOX's own difference operator takes an absolute floor of lambda^2 for the step,
+/// which in SI units (displacements of 1e-3 m, Krylov vectors of 1e-10 m after an ILU
+/// preconditioner) is lost in the residual's round-off; here the step is relative to the
+/// displacement scale: h |v|_inf = lambda max(|x|_inf, dx).
+class DifferenceJacobianOperator final : public Tpetra::Operator<double, LO, GO, Node> {
+ public:
+  explicit DifferenceJacobianOperator(const PeridynamicEvaluator& ev) : ev_(ev) {}
+  Teuchos::RCP<const TMap> getDomainMap() const override { return ev_.ownedFree_; }
+  Teuchos::RCP<const TMap> getRangeMap() const override { return ev_.ownedFree_; }
+  bool hasTransposeApply() const override { return false; }
+  void setState(const Thyra::VectorBase<double>& x) {
+    x_ = x.clone_v();
+    f0_ = Thyra::createMember(x.space());
+    evalF(*x_, *f0_);
+  }
+  void apply(const Tpetra::MultiVector<double, LO, GO, Node>& X, Tpetra::MultiVector<double, LO, GO, Node>& Y,
+             Teuchos::ETransp mode, double alpha, double beta) const override {
+    TEUCHOS_TEST_FOR_EXCEPTION(mode != Teuchos::NO_TRANS, std::logic_error,
+                               "the Jacobian-free operator has no transpose product");
+    TEUCHOS_TEST_FOR_EXCEPTION(x_.is_null(), std::logic_error, "the Jacobian-free operator was applied before evaluation");
+    const double scale = std::max(Thyra::norm_inf(*x_), ev_.problem().disc.dx);
+    auto xp = Thyra::createMember(x_->space());
+    auto fp = Thyra::createMember(x_->space());
+    for (size_t k = 0; k < X.getNumVectors(); ++k) {
+      auto v = Thyra::createVector<double, LO, GO, Node>(
+          Teuchos::rcp_const_cast<Tpetra::Vector<double, LO, GO, Node>>(X.getVector(k)), x_->space());
+      const double vinf = Thyra::norm_inf(*v);
+      auto yk = Y.getVectorNonConst(k);
+      if (vinf == 0.0) {
+        yk->scale(beta);
+        continue;
+      }
+      const double h = ev_.fdLambda_ * scale / vinf;
+      Thyra::V_StVpV(xp.ptr(), h, *v, *x_);
+      evalF(*xp, *fp);
+      Thyra::Vp_StV(fp.ptr(), -1.0, *f0_);
+      auto fpt = TOE::getConstTpetraVector(fp);
+      yk->update(alpha / h, *fpt, beta);
+    }
+  }
+
+ private:
+  void evalF(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& f) const {
+    auto in = ev_.createInArgs();
+    in.set_x(Teuchos::rcpFromRef(x));
+    auto out = ev_.createOutArgs();
+    out.set_f(Teuchos::rcpFromRef(f));
+    ev_.evalModel(in, out);
+  }
+  const PeridynamicEvaluator& ev_;
+  Teuchos::RCP<Thyra::VectorBase<double>> x_, f0_;
+};
 
 PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
                                            std::shared_ptr<const ProblemSpec> problem)
@@ -149,14 +233,44 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
   allExport_ = Teuchos::rcp(new Tpetra::Export<LO, GO>(overlapAll_, ownedAll_));
   freeExport_ = Teuchos::rcp(new Tpetra::Export<LO, GO>(overlapFree_, ownedFree_));
 
-  // Overlapping graph: every owned element {i} u H_i couples all its particles.
+  // External force on owned free DOFs at load factor 1: f_ext = V b.
+  fextOwnedFree_ = Teuchos::rcp(new TVector(ownedFree_));
+  {
+    auto f = fextOwnedFree_->getDataNonConst();
+    LO k = 0;
+    for (int l = 0; l < lp.numOwned; ++l)
+      for (int c = 0; c < D; ++c)
+        if (overlapFreeLid_[l * D + c] >= 0) {
+          const long long g = lp.globalId[l];
+          f[k++] = d.volume[g] * P.bodyForce[g * D + c];
+        }
+  }
+}
+
+PeridynamicEvaluator::Graphs PeridynamicEvaluator::buildGraphs(bool neighbours) const {
+  const ProblemSpec& P = *problem_;
+  const Discretization& d = P.disc;
+  const int D = P.dim();
+  const LocalParticles& lp = model_->particles();
+  const int nLocal = lp.size();
+  // With neighbours, a pair of particles is coupled only when they are within one horizon of
+  // each other (the bonds themselves), not through a shared family member (two horizons).
+  const double reach2 = d.horizon * d.horizon * (1.0 + 1e-10);
+  auto near = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return !neighbours || (a - b).squaredNorm() <= reach2;
+  };
+  Graphs g;
+  // Overlapping graph: every owned element {i} u H_i couples its particles.
   std::vector<std::vector<int>> adj(nLocal);
   for (int i = 0; i < lp.numOwned; ++i) {
     std::vector<int> parts{i};
     for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q) parts.push_back(lp.famIndex[q]);
-    for (int a : parts) adj[a].insert(adj[a].end(), parts.begin(), parts.end());
+    for (int a : parts)
+      for (int b : parts)
+        if (near(lp.X[a], lp.X[b])) adj[a].push_back(b);
   }
-  std::vector<size_t> nnzOv(overlapFreeG.size(), 0);
+  const size_t nOverlapFree = overlapFree_->getNodeNumElements();
+  std::vector<size_t> nnzOv(nOverlapFree, 0);
   for (int l = 0; l < nLocal; ++l) {
     auto& v = adj[l];
     std::sort(v.begin(), v.end());
@@ -167,7 +281,7 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
     for (int c = 0; c < D; ++c)
       if (overlapFreeLid_[l * D + c] >= 0) nnzOv[overlapFreeLid_[l * D + c]] = cnt;
   }
-  overlapGraph_ = Teuchos::rcp(new TCrsGraph(overlapFree_, overlapFree_, Teuchos::ArrayView<const size_t>(nnzOv)));
+  g.overlap = Teuchos::rcp(new TCrsGraph(overlapFree_, overlapFree_, Teuchos::ArrayView<const size_t>(nnzOv)));
   std::vector<LO> cols;
   for (int l = 0; l < nLocal; ++l) {
     cols.clear();
@@ -176,14 +290,18 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
         if (overlapFreeLid_[q * D + c] >= 0) cols.push_back(overlapFreeLid_[q * D + c]);
     for (int c = 0; c < D; ++c)
       if (overlapFreeLid_[l * D + c] >= 0)
-        overlapGraph_->insertLocalIndices(overlapFreeLid_[l * D + c], Teuchos::ArrayView<const LO>(cols));
+        g.overlap->insertLocalIndices(overlapFreeLid_[l * D + c], Teuchos::ArrayView<const LO>(cols));
   }
-  overlapGraph_->fillComplete(ownedFree_, ownedFree_);
+  adj.clear();
+  adj.shrink_to_fit();
+  g.overlap->fillComplete(ownedFree_, ownedFree_);
 
   // Owned graph, computed from the replicated families: row particle p couples to every
-  // particle of every element that contains p, i.e. of {i} u H_i for i in {p} u H_p.
+  // particle of every element that contains p, i.e. of {i} u H_i for i in {p} u H_p (only
+  // those within one horizon of p with neighbours).
   std::vector<size_t> nnz;
   std::vector<std::vector<GO>> rowCols;
+  std::vector<GO> rows;
   std::vector<long long> S;
   for (long long p = begin_; p < end_; ++p) {
     S.clear();
@@ -197,33 +315,29 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
     S.erase(std::unique(S.begin(), S.end()), S.end());
     std::vector<GO> gc;
     for (long long s : S)
-      for (int c = 0; c < D; ++c)
-        if (freeId_[s * D + c] >= 0) gc.push_back(freeId_[s * D + c]);
+      if (near(d.X[p], d.X[s]))
+        for (int c = 0; c < D; ++c)
+          if (freeId_[s * D + c] >= 0) gc.push_back(freeId_[s * D + c]);
     for (int c = 0; c < D; ++c)
       if (freeId_[p * D + c] >= 0) {
         nnz.push_back(gc.size());
         rowCols.push_back(gc);
+        rows.push_back(freeId_[p * D + c]);
       }
   }
-  ownedGraph_ = Teuchos::rcp(new TCrsGraph(ownedFree_, Teuchos::ArrayView<const size_t>(nnz)));
+  g.owned = Teuchos::rcp(new TCrsGraph(ownedFree_, Teuchos::ArrayView<const size_t>(nnz)));
   for (size_t r = 0; r < rowCols.size(); ++r)
-    ownedGraph_->insertGlobalIndices(ownedFreeG[r], Teuchos::ArrayView<const GO>(rowCols[r]));
-  ownedGraph_->fillComplete(ownedFree_, ownedFree_);
-  overlapMatrix_ = Teuchos::rcp(new TCrsMatrix(overlapGraph_));
-  overlapMatrix_->fillComplete();
+    g.owned->insertGlobalIndices(rows[r], Teuchos::ArrayView<const GO>(rowCols[r]));
+  g.owned->fillComplete(ownedFree_, ownedFree_);
+  g.overlapMatrix = Teuchos::rcp(new TCrsMatrix(g.overlap));
+  g.overlapMatrix->fillComplete();
+  return g;
+}
 
-  // External force on owned free DOFs at load factor 1: f_ext = V b.
-  fextOwnedFree_ = Teuchos::rcp(new TVector(ownedFree_));
-  {
-    auto f = fextOwnedFree_->getDataNonConst();
-    LO k = 0;
-    for (int l = 0; l < lp.numOwned; ++l)
-      for (int c = 0; c < D; ++c)
-        if (overlapFreeLid_[l * D + c] >= 0) {
-          const long long g = lp.globalId[l];
-          f[k++] = d.volume[g] * P.bodyForce[g * D + c];
-        }
-  }
+const PeridynamicEvaluator::Graphs& PeridynamicEvaluator::graphs(bool neighbours) const {
+  Graphs& g = neighbours ? nbr_ : full_;
+  if (g.owned.is_null()) g = buildGraphs(neighbours);
+  return g;
 }
 
 MEB::InArgs<double> PeridynamicEvaluator::getNominalValues() const { return nominal_; }
@@ -240,14 +354,96 @@ MEB::OutArgs<double> PeridynamicEvaluator::createOutArgsImpl() const {
   out.setModelEvalDescription("perinox peridynamics");
   out.setSupports(MEB::OUT_ARG_f);
   out.setSupports(MEB::OUT_ARG_W_op);
+  if (!precFactory_.is_null()) out.setSupports(MEB::OUT_ARG_W_prec);
   return out;
 }
 
 Teuchos::RCP<Thyra::LinearOpBase<double>> PeridynamicEvaluator::create_W_op() const {
-  auto A = Teuchos::rcp(new TCrsMatrix(ownedGraph_));
+  Teuchos::RCP<Tpetra::Operator<double, LO, GO, Node>> op;
+  if (mode_ == JacobianMode::MatrixFree) {
+    op = Teuchos::rcp(new JacobianOperator(*this));
+  } else if (mode_ == JacobianMode::JacobianFree) {
+    op = Teuchos::rcp(new DifferenceJacobianOperator(*this));
+  } else {
+    auto A = Teuchos::rcp(new TCrsMatrix(graphs(false).owned));
+    A->fillComplete();
+    op = A;
+  }
+  return Thyra::createLinearOp<double, LO, GO, Node>(op, xSpace_, xSpace_);
+}
+
+Teuchos::RCP<Thyra::PreconditionerBase<double>> PeridynamicEvaluator::create_W_prec() const {
+  if (precFactory_.is_null()) return Teuchos::null;
+  return precFactory_->createPrec();
+}
+
+void PeridynamicEvaluator::setJacobian(JacobianMode mode, PreconditionerMatrix pm,
+                                       Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory,
+                                       double fdLambda) {
+  mode_ = mode;
+  fdLambda_ = fdLambda;
+  precMatrixKind_ = pm;
+  precFactory_ = precFactory;
+  if (!precFactory_.is_null()) {
+    // MueLu: hand it the rigid-body modes as near-null space (through the factory's list).
+    auto pl = precFactory_->getNonconstParameterList();
+    if (!pl.is_null() && pl->isParameter("multigrid algorithm")) pl->set("Nullspace", rigidBodyModes());
+  }
+}
+
+Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> PeridynamicEvaluator::rigidBodyModes() const {
+  const int D = problem_->dim();
+  const int nModes = D == 1 ? 1 : (D == 2 ? 3 : 6);
+  auto B = Teuchos::rcp(new Tpetra::MultiVector<double, LO, GO>(ownedFree_, nModes));
+  const LocalParticles& lp = model_->particles();
+  // Rotations about the centroid of the body, scaled by the horizon so every mode has
+  // entries of order one.
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& X : problem_->disc.X) c += X;
+  c /= static_cast<double>(problem_->disc.size());
+  const double L = problem_->disc.horizon;
+  for (int m = 0; m < nModes; ++m) {
+    auto col = B->getDataNonConst(m);
+    LO k = 0;
+    for (int l = 0; l < lp.numOwned; ++l) {
+      const Eigen::Vector3d r = (lp.X[l] - c) / L;
+      for (int a = 0; a < D; ++a) {
+        if (overlapFreeLid_[l * D + a] < 0) continue;
+        double v = 0;
+        if (m < D) {
+          v = m == a ? 1.0 : 0.0;
+        } else if (D == 2) {  // in-plane rotation: (-y, x)
+          v = a == 0 ? -r[1] : r[0];
+        } else {  // rotation about axis m - 3: omega x r
+          Eigen::Vector3d w = Eigen::Vector3d::Zero();
+          w[m - 3] = 1.0;
+          v = w.cross(r)[a];
+        }
+        col[k++] = v;
+      }
+    }
+  }
+  return B;
+}
+
+Teuchos::RCP<TCrsMatrix> PeridynamicEvaluator::assembledJacobian(const Thyra::VectorBase<double>& x,
+                                                                 bool neighbours) const {
+  auto A = Teuchos::rcp(new TCrsMatrix(graphs(neighbours).owned));
   A->fillComplete();
-  return Thyra::createLinearOp<double, LO, GO, Node>(
-      Teuchos::rcp_implicit_cast<Tpetra::Operator<double, LO, GO, Node>>(A), xSpace_, xSpace_);
+  internalForce(x, A.get(), neighbours);
+  return A;
+}
+
+std::size_t PeridynamicEvaluator::matrixBytes() const {
+  std::size_t b = 0;
+  for (const Graphs* g : {&full_, &nbr_}) {
+    if (g->owned.is_null()) continue;
+    // values (8 B) and local column indices (4 B) per entry, row offsets (8 B) per row, for the
+    // owned and the overlapping matrix (the graphs share their indices with the matrices).
+    for (const auto& gr : {g->owned, g->overlap})
+      b += gr->getNodeNumEntries() * (8 + 4) + (gr->getNodeNumRows() + 1) * 8;
+  }
+  return b;
 }
 
 std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::VectorBase<double>& x) const {
@@ -283,13 +479,14 @@ std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::Vector
 }
 
 Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBase<double>& x,
-                                                           TCrsMatrix* W) const {
+                                                           TCrsMatrix* W, bool neighbours) const {
   const std::vector<double> u = localDisplacements(x);
+  TCrsMatrix* overlapMatrix = W ? graphs(neighbours).overlapMatrix.get() : nullptr;
   TVector rOv(overlapAll_);
   rOv.putScalar(0.0);
   if (W) {
-    overlapMatrix_->resumeFill();
-    overlapMatrix_->setAllToScalar(0.0);
+    overlapMatrix->resumeFill();
+    overlapMatrix->setAllToScalar(0.0);
   }
   // An EvaluationError on one rank must reach all ranks, or the others hang in the Export.
   int failed = 0;
@@ -297,7 +494,7 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
   long long particle = -1;
   {
     auto rd = rOv.getDataNonConst();
-    TpetraSink sink(problem_->dim(), rd.getRawPtr(), overlapFreeLid_, W ? overlapMatrix_.get() : nullptr);
+    TpetraSink sink(problem_->dim(), rd.getRawPtr(), overlapFreeLid_, overlapMatrix);
     try {
       model_->evaluate(u, sink, W != nullptr);
     } catch (const EvaluationError& e) {
@@ -306,10 +503,28 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
       particle = e.particle();
     }
   }
+  if (W) overlapMatrix->fillComplete();
+  synchroniseFailure(failed, message, particle);
+  auto r = Teuchos::rcp(new TVector(ownedAll_));
+  r->doExport(rOv, *allExport_, Tpetra::ADD);
+  if (W) {
+    W->resumeFill();
+    W->setAllToScalar(0.0);
+    W->doExport(*overlapMatrix, *freeExport_, Tpetra::ADD);
+    for (const auto& [lid, value] : frozen_) {
+      (void)value;
+      const LO col = W->getColMap()->getLocalElement(ownedFree_->getGlobalElement(lid));
+      W->sumIntoLocalValues(lid, 1, &frozenStiffness_, &col);
+    }
+    W->fillComplete(ownedFree_, ownedFree_);
+  }
+  return r;
+}
+
+void PeridynamicEvaluator::synchroniseFailure(int failed, std::string message, long long particle) const {
   int anyFailed = 0;
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, failed, Teuchos::outArg(anyFailed));
   if (anyFailed) {
-    if (W) overlapMatrix_->fillComplete();
     // Report the lowest-ranked failure so every rank throws the same sentence.
     long long pmin = failed ? particle : std::numeric_limits<long long>::max();
     long long pglob = pmin;
@@ -321,32 +536,82 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
     }
     throw EvaluationError(message, pglob);
   }
-  auto r = Teuchos::rcp(new TVector(ownedAll_));
-  r->doExport(rOv, *allExport_, Tpetra::ADD);
-  if (W) {
-    overlapMatrix_->fillComplete();
-    W->resumeFill();
-    W->setAllToScalar(0.0);
-    W->doExport(*overlapMatrix_, *freeExport_, Tpetra::ADD);
-    for (const auto& [lid, value] : frozen_) {
-      (void)value;
-      const LO col = W->getColMap()->getLocalElement(ownedFree_->getGlobalElement(lid));
-      W->sumIntoLocalValues(lid, 1, &frozenStiffness_, &col);
-    }
-    W->fillComplete(ownedFree_, ownedFree_);
+}
+
+void PeridynamicEvaluator::applyJacobian(const std::vector<double>& u, const double* v, double* y) const {
+  const ProblemSpec& P = *problem_;
+  const int D = P.dim();
+  const LocalParticles& lp = model_->particles();
+  // Direction on all owned DOFs (prescribed ones do not move), then onto the ghosts.
+  TVector vOwned(ownedAll_);
+  {
+    auto vd = vOwned.getDataNonConst();
+    LO k = 0;
+    for (int l = 0; l < lp.numOwned; ++l)
+      for (int c = 0; c < D; ++c) vd[l * D + c] = overlapFreeLid_[l * D + c] >= 0 ? v[k++] : 0.0;
   }
-  return r;
+  if (!jvOverlap_) {
+    jvOverlap_ = Teuchos::rcp(new TVector(overlapAll_));
+    jvOwned_ = Teuchos::rcp(new TVector(ownedAll_));
+  }
+  TVector vOv(overlapAll_);
+  vOv.doImport(vOwned, *allImport_, Tpetra::INSERT);
+  jvOverlap_->putScalar(0.0);
+  int failed = 0;
+  std::string message;
+  long long particle = -1;
+  {
+    auto vd = vOv.getData();
+    const std::vector<double> vl(vd.begin(), vd.end());
+    auto jd = jvOverlap_->getDataNonConst();
+    try {
+      model_->applyTangent(u, vl, jd.getRawPtr());
+    } catch (const EvaluationError& e) {
+      failed = 1;
+      message = e.what();
+      particle = e.particle();
+    }
+  }
+  synchroniseFailure(failed, message, particle);
+  jvOwned_->doExport(*jvOverlap_, *allExport_, Tpetra::ADD);
+  auto jd = jvOwned_->getData();
+  LO k = 0;
+  for (int l = 0; l < lp.numOwned; ++l)
+    for (int c = 0; c < D; ++c)
+      if (overlapFreeLid_[l * D + c] >= 0) y[k++] = jd[l * D + c];
+  for (const auto& [lid, value] : frozen_) {
+    (void)value;
+    y[lid] = frozenStiffness_ * v[lid];
+  }
 }
 
 void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const MEB::OutArgs<double>& out) const {
   const auto x = in.get_x();
   const auto f = out.get_f();
   const auto Wop = out.get_W_op();
+  Teuchos::RCP<Thyra::PreconditionerBase<double>> Wprec;
+  if (out.supports(MEB::OUT_ARG_W_prec)) Wprec = out.get_W_prec();
+  if (!Wprec.is_null()) {
+    // The preconditioner: Ifpack2 or MueLu on the assembled Jacobian or on its part that
+    // couples direct neighbours only (memory proportional to the family size).
+    precA_ = assembledJacobian(*x, precMatrixKind_ == PreconditionerMatrix::Neighbours);
+    auto op = Thyra::createConstLinearOp<double, LO, GO, Node>(
+        Teuchos::rcp_implicit_cast<const Tpetra::Operator<double, LO, GO, Node>>(precA_), xSpace_, xSpace_);
+    precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
+  }
   if (f.is_null() && Wop.is_null()) return;
   TCrsMatrix* W = nullptr;
   if (!Wop.is_null()) {
     auto op = TOE::getTpetraOperator(Wop);
-    W = &dynamic_cast<TCrsMatrix&>(*op);
+    if (auto* J = dynamic_cast<JacobianOperator*>(op.get())) {
+      J->setState(localDisplacements(*x));
+      if (f.is_null()) return;
+    } else if (auto* Jd = dynamic_cast<DifferenceJacobianOperator*>(op.get())) {
+      Jd->setState(*x);
+      if (f.is_null()) return;
+    } else {
+      W = &dynamic_cast<TCrsMatrix&>(*op);
+    }
   }
   auto fint = internalForce(*x, W);
   if (!f.is_null()) {
@@ -448,13 +713,7 @@ std::vector<ParticleOutput> PeridynamicEvaluator::ownedOutputs(const Thyra::Vect
 namespace perinox {
 
 int PeridynamicEvaluator::negativePivots(const Thyra::VectorBase<double>& x) const {
-  auto Wop = create_W_op();
-  auto in = createInArgs();
-  in.set_x(Teuchos::rcpFromRef(x));
-  auto out = createOutArgs();
-  out.set_W_op(Wop);
-  evalModel(in, out);
-  auto W = Teuchos::rcp_dynamic_cast<const TCrsMatrix>(TOE::getConstTpetraOperator(Wop), true);
+  auto W = assembledJacobian(x, false);
   // Gather every row on rank 0.
   std::vector<GO> mine;
   if (comm_->getRank() == 0)

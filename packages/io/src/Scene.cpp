@@ -167,6 +167,9 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
   so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
+  so.set("Jacobian", "Preset", "Assembled (sparse matrix), Matrix-Free (analytic J v from the linearised kernels; nothing assembled), Jacobian-Free (J v by finite differences of the residual), or Preset (as the linear solver preset says; Assembled if it says nothing)");
+  so.set("Preconditioner Matrix", "Preset", "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: Assembled (the full Jacobian), Neighbours (only couplings within one horizon; memory proportional to the family size), or Preset (as the preset says; Neighbours if it says nothing)");
+  so.set("Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)");
   auto& o = s->sublist("Output", false, "what is written");
   o.set("VTK", true, "write .vtu/.pvtu fields");
   o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
@@ -841,6 +844,29 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     }
   }
 
+  // A preset may name the Jacobian and the preconditioner matrix it is meant for; the scene's
+  // own keys win unless they say Preset.
+  std::string presetJacobian = "Assembled", presetPrecMatrix = "Neighbours";
+  for (auto [key, target] : {std::make_pair("Jacobian", &presetJacobian), std::make_pair("Preconditioner Matrix", &presetPrecMatrix)}) {
+    if (!s.linearSolver->isParameter(key)) continue;
+    if (!s.linearSolver->isType<std::string>(key)) fail(file, std::string("the linear solver's '") + key + "' must be a string");
+    *target = s.linearSolver->get<std::string>(key);
+    s.linearSolver->remove(key);
+  }
+  s.jacobian = so.get<std::string>("Jacobian");
+  if (s.jacobian == "Preset") s.jacobian = presetJacobian;
+  if (s.jacobian != "Assembled" && s.jacobian != "Matrix-Free" && s.jacobian != "Jacobian-Free")
+    fail(file, "'Solver/Jacobian' must be Assembled, Matrix-Free, Jacobian-Free or Preset (got '" + s.jacobian + "')");
+  s.preconditionerMatrix = so.get<std::string>("Preconditioner Matrix");
+  if (s.preconditionerMatrix == "Preset") s.preconditionerMatrix = presetPrecMatrix;
+  if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours")
+    fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
+  s.jfnkLambda = so.get<double>("Jacobian-Free Perturbation");
+  if (!(s.jfnkLambda > 0 && s.jfnkLambda < 1e-2)) fail(file, "'Solver/Jacobian-Free Perturbation' must be in (0, 0.01)");
+  if (s.jacobian != "Assembled" && s.linearSolver->get<std::string>("Linear Solver Type", "Belos") != "Belos")
+    fail(file, "'Solver/Jacobian' = " + s.jacobian + " needs a Krylov solver (Linear Solver Type = Belos); the preset '" +
+                   s.linearSolverName + "' is a direct solver, which needs the assembled matrix");
+
   // Damage makes the tangent unsymmetric: conjugate gradients would silently misbehave.
   if (problem->damage && s.linearSolver->get<std::string>("Linear Solver Type", "") == "Belos") {
     const auto& belos = s.linearSolver->sublist("Linear Solver Types").sublist("Belos");
@@ -857,6 +883,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   sc.problem = problem;
   sc.resolved = Teuchos::rcp(new ParameterList(pl));
   if (s.linearSolverName != "custom") sc.resolved->sublist("Solver").sublist("Linear Solver").setParameters(*s.linearSolver);
+  sc.resolved->sublist("Solver").set("Jacobian", s.jacobian);
+  sc.resolved->sublist("Solver").set("Preconditioner Matrix", s.preconditionerMatrix);
   return sc;
 }
 

@@ -45,7 +45,92 @@ void addPiolaForceStates(BondWork<D>& w, const MatD<D>& P, const TangentD<D>* A,
   }
 }
 
+/// dP = A : dF, with A and the flattening row-major: dP(a,b) = sum_cd A(a*D+b, c*D+d) dF(c,d).
+template <int D>
+MatD<D> contract(const TangentD<D>& A, const MatD<D>& dF) {
+  Eigen::Matrix<double, D * D, 1> f;
+  for (int c = 0; c < D; ++c)
+    for (int d = 0; d < D; ++d) f[c * D + d] = dF(c, d);
+  const Eigen::Matrix<double, D * D, 1> p = A * f;
+  MatD<D> dP;
+  for (int a = 0; a < D; ++a)
+    for (int b = 0; b < D; ++b) dP(a, b) = p[a * D + b];
+  return dP;
+}
+
 }  // namespace
+
+template <int D>
+void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
+  MatD<D> P;
+  TangentD<D> A;
+  piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
+  const MatD<D> dP = contract<D>(A, w.dF);
+  for (int l = 0; l < w.m; ++l) {
+    w.t[l].noalias() += P * w.h[l];
+    w.dt[l].noalias() += dP * w.h[l];
+  }
+}
+
+template <int D>
+void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
+  double w0 = 0;
+  for (int j = 0; j < w.m; ++j) w0 += w.Vj[j];
+  const double c = spec_.G * spec_.C * w.Vi / w0;
+  for (int j = 0; j < w.m; ++j) {
+    w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
+    w.dt[j].noalias() += c * (w.dY[j] - w.dF * w.xi[j]);
+  }
+}
+
+template <int D>
+void ControlEffect<D>::addDirectional(BondWork<D>& w) const {
+  using Vec = typename BondWork<D>::Vec;
+  if (spec_.kind == ControlSpec::Kind::Springs) {
+    for (int j = 0; j < w.m; ++j) {
+      w.t[j].noalias() += spec_.C * (w.Y[j] - w.xi[j]);
+      w.dt[j].noalias() += spec_.C * w.dY[j];
+    }
+    return;
+  }
+  Vec avg = Vec::Zero(), davg = Vec::Zero();
+  for (int l = 0; l < w.m; ++l) {
+    avg += w.Vj[l] * (w.Y[l] - w.xi[l]);
+    davg += w.Vj[l] * w.dY[l];
+  }
+  for (int j = 0; j < w.m; ++j) {
+    w.t[j].noalias() += spec_.C * avg;
+    w.dt[j].noalias() += spec_.C * davg;
+  }
+}
+
+template <int D>
+void StressPointEffect<D>::addDirectional(BondWork<D>& w) const {
+  using Mat = typename BondWork<D>::Mat;
+  std::vector<int> grp;
+  const int ng = groups(w, grp);
+  const double sc = w.i < static_cast<int>(scale_.size()) ? scale_[w.i] : 1.0;
+  for (int p = 0; p < ng; ++p) {
+    Mat K = Mat::Zero(), FK = Mat::Zero(), dFK = Mat::Zero();
+    for (int l = 0; l < w.m; ++l) {
+      if (grp[l] != p) continue;
+      K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
+      FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
+      dFK.noalias() += w.Vj[l] * w.dY[l] * w.xi[l].transpose();
+    }
+    const Mat Kinv = K.inverse();
+    Mat P;
+    TangentD<D> A;
+    piola<D>(material_, FK * Kinv, sc, true, w.i, P, A);
+    const Mat dP = contract<D>(A, dFK * Kinv);
+    for (int l = 0; l < w.m; ++l) {
+      if (grp[l] != p) continue;
+      const auto h = (Kinv * w.xi[l]).eval();
+      w.t[l].noalias() += P * h;
+      w.dt[l].noalias() += dP * h;
+    }
+  }
+}
 
 template <int D>
 void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {

@@ -15,6 +15,7 @@ class CorrespondenceEffect final : public ForceEffect<D> {
   void prepare(const LocalParticles& p) override { scale_ = p.modulusScale; }
   const char* name() const override { return "correspondence"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
+  void addDirectional(BondWork<D>& w) const override;
 
  private:
   const Material& material_;
@@ -30,6 +31,7 @@ class ControlEffect final : public ForceEffect<D> {
     return spec_.kind == ControlSpec::Kind::Springs ? "springs control" : "average displacement state control";
   }
   void addForces(BondWork<D>& w, bool tangent) const override;
+  void addDirectional(BondWork<D>& w) const override;
 
  private:
   ControlSpec spec_;
@@ -53,6 +55,7 @@ class StressPointEffect final : public ForceEffect<D> {
     globalId_ = p.globalId;
   }
   void addForces(BondWork<D>& w, bool tangent) const override;
+  void addDirectional(BondWork<D>& w) const override;
   /// Stress point (0 or 1) of each bond of w, or all 0 for a defective family; returns the count.
   int groups(const BondWork<D>& w, std::vector<int>& g) const;
 
@@ -70,6 +73,7 @@ class StabilizationEffect final : public ForceEffect<D> {
   explicit StabilizationEffect(const StabilizationSpec& s) : spec_(s) {}
   const char* name() const override { return "stabilization"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
+  void addDirectional(BondWork<D>& w) const override;
 
  private:
   StabilizationSpec spec_;

@@ -40,6 +40,8 @@ struct Model::Impl {
   virtual void addControl(const ControlSpec& c) = 0;
   virtual void addStressPoints(const Material& m, unsigned seed) = 0;
   virtual std::vector<std::string> names() const = 0;
+  virtual void applyTangent(const Model& m, const std::vector<double>& u, const std::vector<double>& v,
+                            double* jv) const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
 };
 
@@ -78,6 +80,53 @@ struct ImplD final : Model::Impl {
         }
       }
       w.t[j] *= Ts;
+    }
+  }
+
+  /// The directional form of soften: dt_j <- T_s dt_j + T_s' (Y_j . dY_j / (|Y_j| |xi_j|)) t_j,
+  /// then t_j <- T_s t_j.
+  static void softenDirectional(const DamageSpec& d, BondWork<D>& w) {
+    for (int j = 0; j < w.m; ++j) {
+      const double ly = w.Y[j].norm(), lx = w.xi[j].norm();
+      double Ts, dTs;
+      bondSoftening(d, (ly - lx) / lx, Ts, dTs);
+      w.dt[j] *= Ts;
+      if (dTs != 0.0 && ly > 0) w.dt[j] += (dTs * w.Y[j].dot(w.dY[j]) / (ly * lx)) * w.t[j];
+      w.t[j] *= Ts;
+    }
+  }
+
+  void applyTangent(const Model& model, const std::vector<double>& u, const std::vector<double>& v,
+                    double* jv) const override {
+    const LocalParticles& p = model.particles();
+    BondWork<D> w;
+    for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) continue;
+      kinematics(p, u, i, w);
+      w.dY.resize(w.m);
+      w.dt.assign(w.m, Vec::Zero());
+      w.dF.setZero();
+      for (int l = 0; l < w.m; ++l) {
+        const int j = w.nbr[l];
+        for (int a = 0; a < D; ++a) w.dY[l][a] = v[j * D + a] - v[i * D + a];
+        w.dF.noalias() += w.Vj[l] * w.dY[l] * w.h[l].transpose();
+      }
+      try {
+        for (const auto& e : effects) e->addDirectional(w);
+      } catch (const EvaluationError& e) {
+        std::ostringstream msg;
+        msg << e.what() << " at particle " << p.globalId[i] << " (X = " << p.X[i].head(D).transpose() << ")";
+        throw EvaluationError(msg.str(), p.globalId[i]);
+      }
+      if (damage) softenDirectional(*damage, w);
+      for (int l = 0; l < w.m; ++l) {
+        const double s = w.Vi * w.Vj[l];
+        const int j = w.nbr[l];
+        for (int a = 0; a < D; ++a) {
+          jv[i * D + a] -= s * w.dt[l][a];
+          jv[j * D + a] += s * w.dt[l][a];
+        }
+      }
     }
   }
 
@@ -328,6 +377,10 @@ std::vector<std::string> Model::effectNames() const { return impl_->names(); }
 
 void Model::evaluate(const std::vector<double>& u, ElementSink& sink, bool wantTangent) const {
   impl_->evaluate(*this, u, sink, wantTangent);
+}
+
+void Model::applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const {
+  impl_->applyTangent(*this, u, v, jv);
 }
 
 std::vector<ParticleOutput> Model::outputs(const std::vector<double>& u) const {

@@ -18,18 +18,16 @@ AdrResult solveAdr(PeridynamicEvaluator& ev, Thyra::VectorBase<double>& x, const
   AdrResult res;
   auto space = ev.get_x_space();
   auto f = Thyra::createMember(space);
-  auto W = ev.create_W_op();
-  auto eval = [&](bool withW) {
+  auto eval = [&]() {
     auto in = ev.createInArgs();
     in.set_x(Teuchos::rcpFromRef(x));
     auto out = ev.createOutArgs();
     out.set_f(f);
-    if (withW) out.set_W_op(W);
     ev.evalModel(in, out);
   };
-  eval(true);
+  eval();
   // Fictitious mass from the stiffness bound (stability of the central difference with dt = 1).
-  auto A = Teuchos::rcp_dynamic_cast<const TCrsMatrix>(TOE::getConstTpetraOperator(W), true);
+  auto A = ev.assembledJacobian(x);
   const size_t n = A->getNodeNumRows();
   std::vector<double> mass(n, 0.0);
   for (size_t r = 0; r < n; ++r) {
@@ -54,7 +52,7 @@ AdrResult solveAdr(PeridynamicEvaluator& ev, Thyra::VectorBase<double>& x, const
   const double N = static_cast<double>(ev.numFreeDofs());
   double e1first = -1, e2first = -1;
   for (long long it = 0; it < opt.maxIterations; ++it) {
-    if (it > 0) eval(false);
+    if (it > 0) eval();
     auto fd = ft->getData();   // f = f_int - f_ext; the out-of-balance force is -f
     auto xd = xt->getDataNonConst();
     // Damping from Rayleigh's quotient of the local diagonal stiffness.

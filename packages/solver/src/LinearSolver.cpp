@@ -66,4 +66,26 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
   return builder.createLinearSolveStrategy("");
 }
 
+SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks) {
+  if (params->get<std::string>("Linear Solver Type", "Belos") != "Belos")
+    throw std::invalid_argument(
+        "a matrix-free or Jacobian-free Newton solve needs a Krylov solver: 'Linear Solver Type' must "
+        "be Belos (a direct solver needs the assembled matrix)");
+  SplitLinearSolver s;
+  auto krylov = Teuchos::rcp(new Teuchos::ParameterList(*params));
+  krylov->set("Preconditioner Type", "None");
+  s.krylov = buildLinearSolverFactory(krylov, nranks);
+  if (params->get<std::string>("Preconditioner Type", "None") != "None") {
+    Stratimikos::DefaultLinearSolverBuilder builder;
+    registerSolvers(builder);
+    try {
+      builder.setParameterList(Teuchos::rcp(new Teuchos::ParameterList(*params)));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(std::string("invalid linear solver parameters: ") + e.what());
+    }
+    s.preconditioner = builder.createPreconditioningStrategy("");
+  }
+  return s;
+}
+
 }  // namespace perinox

@@ -101,7 +101,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
 
   auto x0 = x.clone_v();
   NOX::Thyra::Vector guess(x0);
-  auto group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_));
+  Teuchos::RCP<NOX::Thyra::Group> group;
 
   auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance, options_.floorFactor));
   auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
@@ -113,6 +113,16 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
 
   NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
   try {
+    const JacobianMode mode = evaluator_->jacobianMode();
+    if (mode == JacobianMode::Assembled) {
+      group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_));
+    } else {
+      // Matrix-free: W_op is the evaluator's analytic product or its finite difference of f;
+      // the preconditioner, when there is one, is built by the model (W_prec).
+      group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_, evaluator_->create_W_op(), evaluator_->get_W_factory(),
+                                                 evaluator_->create_W_prec(),
+                                                 Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
+    }
     auto solver = NOX::Solver::buildSolver(group, combo, params);
     status = solver->solve();
     const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());

@@ -9,6 +9,7 @@
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_PreconditionerFactoryBase.hpp>
 #include <Thyra_StateFuncModelEvaluatorBase.hpp>
 #include <Tpetra_CrsMatrix.hpp>
 #include <Tpetra_Export.hpp>
@@ -28,6 +29,17 @@ using TVector = Tpetra::Vector<double, LO, GO>;
 using TCrsGraph = Tpetra::CrsGraph<LO, GO>;
 using TCrsMatrix = Tpetra::CrsMatrix<double, LO, GO>;
 
+/// How the Newton solver gets W = df/dx: an assembled sparse matrix; the analytic matrix-free
+/// product (linearised kernels, nothing assembled); or finite differences of f (Jacobian-free,
+/// built by the Newton solver around this evaluator).
+enum class JacobianMode { Assembled, MatrixFree, JacobianFree };
+/// The matrix a matrix-free solve's preconditioner is built from: the assembled Jacobian, or its
+/// part that couples particles within one horizon (memory proportional to the family size).
+enum class PreconditionerMatrix { Assembled, Neighbours };
+
+class JacobianOperator;
+class DifferenceJacobianOperator;
+
 class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
  public:
   PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
@@ -46,6 +58,20 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
     return wFactory_;
   }
   void set_W_factory(Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> f) { wFactory_ = f; }
+  /// Selects how W is provided. With a preconditioner factory, W_prec is supported: the model
+  /// builds it from the assembled Jacobian or its direct-neighbour part (pm). A MueLu factory is
+  /// given the rigid-body modes as near-null space. Call before the first evaluation.
+  void setJacobian(JacobianMode mode, PreconditionerMatrix pm,
+                   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory, double fdLambda = 1e-6);
+  JacobianMode jacobianMode() const { return mode_; }
+  Teuchos::RCP<Thyra::PreconditionerBase<double>> create_W_prec() const override;
+  /// W at x assembled, whatever the Jacobian mode (for diagnostics, the explicit solver, and
+  /// preconditioners); neighbours keeps only couplings within one horizon.
+  Teuchos::RCP<TCrsMatrix> assembledJacobian(const Thyra::VectorBase<double>& x, bool neighbours = false) const;
+  /// Bytes held by the sparse matrices built so far (owned and overlapping; values, indices, rows).
+  std::size_t matrixBytes() const;
+  /// Rigid-body modes on the owned free DOFs (1 in 1D, 3 in 2D, 6 in 3D).
+  Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> rigidBodyModes() const;
   Thyra::ModelEvaluatorBase::InArgs<double> createInArgs() const override;
 
   // --- diagnostics and output ---
@@ -101,8 +127,31 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// Local displacements (local particles * dim) for the state x at the current load factor.
   std::vector<double> localDisplacements(const Thyra::VectorBase<double>& x) const;
   /// Owned-all internal force vector (owned particles * dim) at x.
-  Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W) const;
+  Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W,
+                                      bool neighbours = false) const;
   void buildMapsAndGraphs();
+  /// Throws the same EvaluationError on every rank if any rank failed.
+  void synchroniseFailure(int failed, std::string message, long long particle) const;
+  /// y = (df/dx) v on the owned free DOFs, linearised at the local displacements u.
+  void applyJacobian(const std::vector<double>& u, const double* v, double* y) const;
+  friend class JacobianOperator;
+  friend class DifferenceJacobianOperator;
+  double fdLambda_ = 1e-6;
+
+  struct Graphs {
+    Teuchos::RCP<TCrsGraph> owned, overlap;
+    Teuchos::RCP<TCrsMatrix> overlapMatrix;
+  };
+  /// The owned and overlapping graphs (every element couples all its particles, or only those
+  /// within one horizon of each other), built on first use.
+  const Graphs& graphs(bool neighbours) const;
+  Graphs buildGraphs(bool neighbours) const;
+  mutable Graphs full_, nbr_;
+  JacobianMode mode_ = JacobianMode::Assembled;
+  PreconditionerMatrix precMatrixKind_ = PreconditionerMatrix::Assembled;
+  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
+  mutable Teuchos::RCP<TCrsMatrix> precA_;
+  mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
 
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::shared_ptr<const ProblemSpec> problem_;
@@ -116,8 +165,6 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<const TMap> ownedFree_, overlapFree_, ownedAll_, overlapAll_;
   Teuchos::RCP<Tpetra::Import<LO, GO>> allImport_;
   Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_, freeExport_;
-  Teuchos::RCP<TCrsGraph> ownedGraph_, overlapGraph_;
-  mutable Teuchos::RCP<TCrsMatrix> overlapMatrix_;
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
   // Detached particles: their free DOFs are frozen, f = k (x - x_frozen), W_ii = k.
   std::vector<long long> detachedAll_;

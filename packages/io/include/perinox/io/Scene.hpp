@@ -67,6 +67,9 @@ struct SolverSettings {
   int verbosity = 0;
   Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
   std::string linearSolverName;                       // preset name or "custom"
+  std::string jacobian = "Assembled";                 // Assembled, Matrix-Free, Jacobian-Free
+  std::string preconditionerMatrix = "Neighbours";    // matrix-free: Assembled or Neighbours
+  double jfnkLambda = 1e-6;
 };
 
 struct OutputSettings {

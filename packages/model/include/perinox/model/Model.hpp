@@ -67,6 +67,10 @@ struct BondWork {
   /// dF/du_k = e_c (x) g_k: g_0 = -sum_l V_l h_l, g_{1+l} = V_l h_l.
   Vec g(int k) const;
   Vec gsum;                    // sum_l V_l h_l (so g_0 = -gsum)
+  // Directional derivative along a displacement direction v (matrix-free products):
+  std::vector<Vec> dY;         // dY_l = v_j - v_i
+  Mat dF;                      // dF = sum_l V_l dY_l (x) h_l
+  std::vector<Vec> dt;         // dT_i<xi_ij>[v], accumulated by the effects
 };
 
 /// One effect: adds its bond force states (and their derivatives) for particle i.
@@ -79,6 +83,9 @@ class ForceEffect {
   virtual void prepare(const LocalParticles&) {}
   /// Adds to w.t (and to w.tan if tangent). Throws EvaluationError on an invalid state.
   virtual void addForces(BondWork<D>& w, bool tangent) const = 0;
+  /// Adds the force states to w.t and their directional derivative along w.dY (with w.dF) to
+  /// w.dt, without forming dT/du: the kernel of the matrix-free Jacobian-vector product.
+  virtual void addDirectional(BondWork<D>& w) const = 0;
 };
 
 /// Receives element contributions. particles: local ids of the element (i first);
@@ -184,6 +191,11 @@ class Model {
   /// Evaluates every owned element at local displacements u (size*dim, interleaved) and hands
   /// each to the sink (tangent only if wantTangent).
   void evaluate(const std::vector<double>& u, ElementSink& sink, bool wantTangent) const;
+
+  /// Matrix-free tangent product: adds (df_int/du) v, summed over the owned elements, to jv
+  /// (local particles * dim, interleaved, like u and v). The element tangents are never formed:
+  /// each effect linearises its force states along v. Detached particles are skipped.
+  void applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const;
 
   /// F and Cauchy stress of the owned particles at u.
   std::vector<ParticleOutput> outputs(const std::vector<double>& u) const;

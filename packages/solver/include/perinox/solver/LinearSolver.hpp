@@ -5,6 +5,7 @@
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_PreconditionerFactoryBase.hpp>
 
 namespace perinox {
 
@@ -17,6 +18,15 @@ Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters();
 /// KLU2 returns wrong answers in parallel), unknown solver or preconditioner names.
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
     const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks);
+
+/// For matrix-free solves: the Krylov solver with no preconditioner of its own, and the
+/// preconditioner factory named by "Preconditioner Type" (null for None), which the model
+/// evaluator applies to the matrix it assembles for preconditioning (W_prec).
+struct SplitLinearSolver {
+  Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> krylov;
+  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> preconditioner;
+};
+SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks);
 
 /// Valid Stratimikos parameters (for validation before any work).
 Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters();
