@@ -13,6 +13,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <sys/resource.h>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
@@ -340,6 +341,16 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   }
   writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks);
   res.wallTime = now() - t0;
+  // Peak resident memory: the largest rank's and the sum over ranks (MiB).
+  double rss = 0, rssMax = 0, rssSum = 0;
+  {
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) == 0) rss = ru.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+  }
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, rss, Teuchos::outArg(rssMax));
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, rss, Teuchos::outArg(rssSum));
+  long long matrixBytes = static_cast<long long>(evaluator->matrixBytes()), matrixBytesAll = 0;
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, matrixBytes, Teuchos::outArg(matrixBytesAll));
   comm->barrier();
 
   if (rank == 0) {
@@ -385,7 +396,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     j["linear_solver"] = scene.solver.linearSolverName;
     j["jacobian"] = scene.solver.jacobian;
     if (scene.solver.jacobian != "Assembled") j["preconditioner_matrix"] = scene.solver.preconditionerMatrix;
-    j["matrix_bytes"] = evaluator->matrixBytes();
+    j["matrix_bytes"] = matrixBytesAll;  // sparse matrices held (all ranks)
+    j["peak_rss_mib_max_rank"] = rssMax;
+    j["peak_rss_mib_all_ranks"] = rssSum;
     j["method"] = scene.solver.method;
     j["tolerance"] = scene.solver.tolerance;
     json steps = json::array();
