@@ -18,6 +18,7 @@
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
 #include "perinox/solver/AdrSolver.hpp"
+#include "perinox/solver/ArcLength.hpp"
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
 
@@ -111,6 +112,141 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", csv.str());
 }
 
+/// Pseudo-arc-length continuation from the converged state (xConv, lambda): secant predictor
+/// (the first step along the tangent J z = f_ext-like -df/dlambda), Riks corrector, the arc
+/// halved on failure and grown after easy steps. Fills res (steps, probes, path, limit points);
+/// returns false with res.failure set when a step fails for good.
+bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& ev,
+                           Thyra::VectorBase<double>& xConv, double& lambda, RunResult& res, bool quiet, int rank) {
+  const auto& A = scene.solver.arc;
+  ArcLengthOptions ao;
+  ao.tolerance = scene.solver.tolerance;
+  ao.maxIterations = scene.solver.maxIterations;
+  ao.floorFactor = scene.solver.floorFactor;
+  ArcLengthSolver als(ev, ao);
+  int deflProbe = -1;
+  for (std::size_t k = 0; k < scene.probes.size(); ++k)
+    if (scene.probes[k].name == A.deflectionProbe) deflProbe = static_cast<int>(k);
+
+  auto tx = xConv.clone_v();
+  const std::string why = als.tangent(xConv, lambda, *tx);
+  if (!why.empty()) {
+    res.failure = "the initial tangent of the path could not be computed: " + why;
+    return false;
+  }
+  const double zn = Thyra::norm_2(*tx);
+  // Metric weight: with w = 1 / |dx/dlambda|^2 at the start, displacement and load factor
+  // contribute equally to the first arc.
+  const double w = zn > 0 ? 1.0 / (zn * zn) : 1.0;
+  double tl = 1.0;
+  auto normalise = [&](Thyra::VectorBase<double>& v, double& l) {
+    const double n = std::sqrt(w * Thyra::dot(v, v) + l * l);
+    Thyra::scale(1.0 / n, Teuchos::ptrFromRef(v));
+    l /= n;
+  };
+  normalise(*tx, tl);
+  auto x = xConv.clone_v(), xPred = xConv.clone_v();
+  double ds = A.initial;
+  std::vector<double> defl;  // deflection of every converged point, starting with the initial one
+  auto deflection = [&](const Thyra::VectorBase<double>& state) {
+    if (deflProbe < 0) return 0.0;
+    const auto u = ev->ownedDisplacements(state);
+    return probeValue(*ev, scene.probes[deflProbe], state, u)[A.deflectionComponent];
+  };
+  defl.push_back(deflection(xConv));
+  std::vector<double> lambdas{lambda};
+  int step = 0;
+  for (;;) {
+    if (lambda >= A.targetLoadFactor) return true;
+    if (A.targetDeflection > 0 && std::abs(defl.back()) >= A.targetDeflection) return true;
+    if (step >= A.maxSteps) {
+      std::ostringstream s;
+      s << "reached 'Solver/Arc Length/Max Steps' = " << A.maxSteps << " at load factor " << lambda
+        << " before the target (load factor " << A.targetLoadFactor;
+      if (A.targetDeflection > 0) s << " or deflection " << A.targetDeflection;
+      s << ")";
+      res.failure = s.str();
+      return false;
+    }
+    ++step;
+    const double tStep = now();
+    StepRecord rec;
+    rec.step = step;
+    ArcLengthResult r;
+    int cut = 0;
+    double l = lambda;
+    for (;;) {
+      // Predictor: (xConv, lambda) + ds (tx, tl).
+      Thyra::V_StVpStV(x.ptr(), 1.0, xConv, ds, *tx);
+      l = lambda + ds * tl;
+      Thyra::copy(*x, xPred.ptr());
+      const double lPred = l;
+      r = als.correct(*x, l, *tx, tl, w, *xPred, lPred);
+      if (r.converged) break;
+      if (cut >= scene.solver.maxCutbacks) break;
+      if (0.5 * ds < A.minimum) {
+        r.failure += "; the arc length would fall below 'Solver/Arc Length/Min Arc Length'";
+        break;
+      }
+      ++cut;
+      ds *= 0.5;
+      if (rank == 0 && !quiet)
+        std::cout << "  step " << step << ": " << r.failure << "; cutting the arc length to " << ds << "\n";
+    }
+    rec.cutbacks = cut;
+    rec.loadFactor = l;
+    rec.arcLength = ds;
+    rec.newtonIterations = r.iterations;
+    rec.residuals = r.residuals;
+    rec.reactionNormalised = r.reactionNormalised;
+    rec.atRoundoffFloor = r.atRoundoffFloor;
+    rec.floor = r.floorNormalised;
+    if (!r.converged) {
+      rec.elapsed = now() - tStep;
+      res.steps.push_back(rec);
+      std::ostringstream s;
+      s << "arc-length step " << step << " (from load factor " << lambda << ") failed after " << cut
+        << " cut-back(s): " << r.failure;
+      res.failure = s.str();
+      ev->setLoadFactor(lambda);
+      return false;
+    }
+    // Secant direction for the next predictor: it continues through limit points, where the
+    // load factor turns back, without any sign decision.
+    Thyra::V_VmV(tx.ptr(), *x, xConv);
+    tl = l - lambda;
+    normalise(*tx, tl);
+    Thyra::copy(*x, Teuchos::ptrFromRef(xConv));
+    lambda = l;
+    ev->setLoadFactor(lambda);
+    if (scene.solver.stabilityCheck) rec.negativePivots = ev->negativePivots(xConv);
+    rec.elapsed = now() - tStep;
+    res.steps.push_back(rec);
+    res.pathLoadFactors.push_back(lambda);
+    const auto u = ev->ownedDisplacements(xConv);
+    for (std::size_t k = 0; k < scene.probes.size(); ++k)
+      if (scene.probes[k].quantity != "Profile")
+        res.probes[k].second.push_back({lambda, probeValue(*ev, scene.probes[k], xConv, u)});
+    defl.push_back(deflection(xConv));
+    lambdas.push_back(lambda);
+    const std::size_t n = lambdas.size();
+    if (n >= 3 && lambdas[n - 2] > lambdas[n - 3] && lambdas[n - 1] < lambdas[n - 2]) {
+      res.limitPoints.push_back({step - 1, lambdas[n - 2], defl[n - 2]});
+      if (rank == 0 && !quiet)
+        std::cout << std::setprecision(10) << "  limit point passed: the load factor peaked at " << lambdas[n - 2] << " (step " << step - 1
+                  << ", deflection " << defl[n - 2] << ") and now decreases\n";
+    }
+    if (rank == 0 && !quiet)
+      std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(6) << lambda
+                << "  arc " << std::scientific << std::setprecision(3) << ds << "  corrector " << std::setw(2)
+                << r.iterations << "  residual " << r.residuals.back()
+                << (deflProbe >= 0 ? "  deflection " : "") << (deflProbe >= 0 ? std::to_string(defl.back()) : "")
+                << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
+                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << "\n";
+    if (r.iterations <= scene.solver.easyIterations) ds = std::min(A.maximum, 1.5 * ds);
+  }
+}
+
 }  // namespace
 
 RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
@@ -152,6 +288,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   nopt.lineSearch = scene.solver.lineSearch;
   nopt.verbosity = scene.solver.verbosity;
   nopt.floorFactor = scene.solver.floorFactor;
+  nopt.stagnationStop = scene.solver.stagnationStop;
   NewtonSolver newton(evaluator, nopt);
 
   auto x = Thyra::createMember(evaluator->get_x_space());
@@ -173,7 +310,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   if (rank == 0 && !options.quiet)
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
               << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << "\n";
-  while (lambda < 1.0 - 1e-12) {
+  const bool arcLength = scene.solver.continuation == "Arc Length";
+  if (arcLength) ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
+  while (!arcLength && lambda < 1.0 - 1e-12) {
     if (step >= scene.solver.maxTotalSteps) {
       ok = false;
       std::ostringstream s;
@@ -308,6 +447,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
     Thyra::copy(*xConverged, xPrevious.ptr());
     Thyra::copy(*x, xConverged.ptr());
+    res.pathLoadFactors.push_back(lambda);
     lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);
     const auto u = evaluator->ownedDisplacements(*x);
     for (std::size_t k = 0; k < scene.probes.size(); ++k)
@@ -332,6 +472,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
   }
   res.converged = ok;
+  evaluator->setLoadFactor(lambda);  // the state written is the last converged one
 
   // Output of the last converged state.
   const auto u = evaluator->ownedDisplacements(*xConverged);
@@ -417,6 +558,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                        {"break_rounds", s.breakRounds},
                        {"detached", s.detached},
                        {"time_s", s.elapsed}});
+      if (arcLength) steps.back()["arc_length"] = s.arcLength;
+      if (s.negativePivots >= -1) steps.back()["negative_pivots"] = s.negativePivots;
       for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
     }
     j["steps"] = steps;
@@ -435,6 +578,35 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       probes[res.probes[k].first] = list;
     }
     j["probes"] = probes;
+    j["continuation"] = scene.solver.continuation;
+    if (arcLength) {
+      json lp = json::array();
+      for (const auto& l : res.limitPoints)
+        lp.push_back({{"step", l.step}, {"load_factor", l.loadFactor}, {"deflection", l.deflection}});
+      j["limit_points"] = lp;
+    }
+    // The path: load factor and every probe at every converged step.
+    {
+      std::ostringstream path;
+      path << "step,load_factor";
+      const char* comp = "xyz";
+      for (std::size_t k = 0; k < res.probes.size(); ++k)
+        if (scene.probes[k].quantity != "Profile")
+          for (int c = 0; c < scene.problem->dim(); ++c) {
+            std::string name = res.probes[k].first;
+            std::replace(name.begin(), name.end(), ' ', '_');
+            path << ',' << name << '_' << comp[c];
+          }
+      path << '\n' << std::setprecision(15);
+      for (std::size_t i = 0; i < res.pathLoadFactors.size(); ++i) {
+        path << i + 1 << ',' << res.pathLoadFactors[i];
+        for (std::size_t k = 0; k < res.probes.size(); ++k)
+          if (scene.probes[k].quantity != "Profile")
+            for (double v : res.probes[k].second[i].second) path << ',' << v;
+        path << '\n';
+      }
+      writeFileAtomic(staging + "/path.csv", path.str());
+    }
     if (res.hasError) j["errors"] = {{"e_u", res.errorU}, {"reference", scene.reference.type}};
     writeFileAtomic(staging + "/summary.json", j.dump(2) + "\n");
     writeFileAtomic(staging + "/newton.csv", csv.str());

@@ -24,6 +24,15 @@ struct StepRecord {
   long long brokenBonds = 0;       // damage: bonds broken after this step converged
   int breakRounds = 0;             // damage: re-equilibrations after breaking
   std::vector<long long> detached; // particles detached in this step
+  double arcLength = 0;            // arc-length continuation: the arc of this step
+  int negativePivots = -2;         // arc-length continuation with Stability Check: the tangent's
+                                   // negative pivots at the converged point (-2: not computed)
+};
+
+struct LimitPoint {
+  int step = 0;                    // the step at which the load factor peaked
+  double loadFactor = 0;
+  double deflection = 0;
 };
 
 struct RunResult {
@@ -32,6 +41,8 @@ struct RunResult {
   std::vector<StepRecord> steps;
   // probe name -> per converged step: load factor and values (displacement or reaction)
   std::vector<std::pair<std::string, std::vector<std::pair<double, std::vector<double>>>>> probes;
+  std::vector<double> pathLoadFactors;  // load factor of every converged step (path.csv)
+  std::vector<LimitPoint> limitPoints;  // arc-length continuation: local maxima of the load factor
   bool hasError = false;
   double errorU = 0;   // e_u of seed 000 eq. 56 at the final state
   double wallTime = 0;

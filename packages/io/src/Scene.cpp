@@ -165,6 +165,17 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Stability Check", false, "after each converged step, count negative pivots of the tangent (serial LDL^T on rank 0) and stop with a diagnosis when the equilibrium is unstable");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
+  so.set("Stagnation Stop", 0, "stop a Newton solve early (and cut back) when its normalised residual has not halved over this many iterations; 0: off (a failed solve is still diagnosed as stagnation over its last 5 iterations)");
+  so.set("Continuation", "Load Stepping", "Load Stepping (load factor 0 to 1 in increments) or Arc Length (pseudo-arc-length continuation through limit points; see the Arc Length sublist)");
+  auto& al = so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2");
+  al.set("Initial Arc Length", 0.05, "arc length of the first step");
+  al.set("Min Arc Length", 1e-4, "the run stops when a failing step would need a shorter arc");
+  al.set("Max Arc Length", 0.5, "the arc grows by 1.5 after steps needing at most 'Solver/Easy Iterations' corrector iterations, up to this");
+  al.set("Max Steps", 100, "converged continuation steps allowed");
+  al.set("Target Load Factor", 1.0, "stop once the load factor reaches this");
+  al.set("Target Deflection", 0.0, "stop once the magnitude of the deflection reaches this (0: no deflection target)");
+  al.set("Deflection Probe", "", "name of a Displacement probe whose component 'Deflection Component' is the deflection (for the target and the path)");
+  al.set("Deflection Component", "y", "x, y or z");
   so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
   so.set("Jacobian", "Preset", "Assembled (sparse matrix), Matrix-Free (analytic J v from the linearised kernels; nothing assembled), Jacobian-Free (J v by finite differences of the residual), or Preset (as the linear solver preset says; Assembled if it says nothing)");
@@ -360,10 +371,10 @@ void applyOverride(ParameterList& pl, const std::string& spec, const ParameterLi
         ++i;
         continue;
       }
-      if (val->isSublist(parts[i])) {
+      if (parts[i] == "Linear Solver") {
+        val = nullptr;  // Stratimikos' own list: validated by Stratimikos
+      } else if (val->isSublist(parts[i])) {
         val = &val->sublist(parts[i]);
-      } else if (parts[i] == "Linear Solver" || !val) {
-        val = nullptr;
       } else {
         throw SceneError("--set " + spec + ": unknown sublist '" + parts[i] + "'");
       }
@@ -824,6 +835,41 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   s.verbosity = so.get<int>("Verbosity");
   s.predictor = so.get<bool>("Predictor");
   s.stabilityCheck = so.get<bool>("Stability Check");
+  s.stagnationStop = so.get<int>("Stagnation Stop");
+  if (s.stagnationStop < 0) fail(file, "'Solver/Stagnation Stop' must be >= 0");
+  s.continuation = so.get<std::string>("Continuation");
+  if (s.continuation != "Load Stepping" && s.continuation != "Arc Length")
+    fail(file, "'Solver/Continuation' must be Load Stepping or Arc Length, not '" + s.continuation + "'");
+  {
+    const auto& al = so.sublist("Arc Length");
+    auto& a = s.arc;
+    a.initial = al.get<double>("Initial Arc Length");
+    a.minimum = al.get<double>("Min Arc Length");
+    a.maximum = al.get<double>("Max Arc Length");
+    a.maxSteps = al.get<int>("Max Steps");
+    a.targetLoadFactor = al.get<double>("Target Load Factor");
+    a.targetDeflection = al.get<double>("Target Deflection");
+    a.deflectionProbe = al.get<std::string>("Deflection Probe");
+    a.deflectionComponent = componentIndex(al.get<std::string>("Deflection Component"));
+    if ((s.continuation == "Arc Length" || !a.deflectionProbe.empty()) && (a.deflectionComponent < 0 || a.deflectionComponent >= dim))
+      fail(file, "'Solver/Arc Length/Deflection Component' must be a component of this " + std::to_string(dim) + "D scene (x, y or z)");
+    if (!(a.minimum > 0 && a.minimum <= a.initial && a.initial <= a.maximum))
+      fail(file, "'Solver/Arc Length' needs 0 < Min Arc Length <= Initial Arc Length <= Max Arc Length");
+    if (a.maxSteps < 1) fail(file, "'Solver/Arc Length/Max Steps' must be at least 1");
+    if (!(a.targetLoadFactor > 0)) fail(file, "'Solver/Arc Length/Target Load Factor' must be positive");
+    if (!(a.targetDeflection >= 0)) fail(file, "'Solver/Arc Length/Target Deflection' must be >= 0");
+    if (!a.deflectionProbe.empty()) {
+      bool found = false;
+      for (const auto& p : sc.probes) found |= p.name == a.deflectionProbe && p.quantity == "Displacement";
+      if (!found) fail(file, "'Solver/Arc Length/Deflection Probe' = '" + a.deflectionProbe + "' is not a Displacement probe under Probes");
+    }
+    if (a.targetDeflection > 0 && a.deflectionProbe.empty())
+      fail(file, "'Solver/Arc Length/Target Deflection' needs a 'Deflection Probe'");
+    if (s.continuation == "Arc Length") {
+      if (s.method != "Newton") fail(file, "'Solver/Continuation' = Arc Length needs 'Solver/Method' = Newton");
+      if (problem->damage) fail(file, "'Solver/Continuation' = Arc Length does not support damage (bonds break between load steps); use Load Stepping");
+    }
+  }
   s.floorFactor = so.get<double>("Round-off Floor Factor");
   if (!(s.floorFactor >= 0)) fail(file, "'Solver/Round-off Floor Factor' must be >= 0");
   s.linearSolverName = so.get<std::string>("Linear Solver Preset");
@@ -863,6 +909,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
   s.jfnkLambda = so.get<double>("Jacobian-Free Perturbation");
   if (!(s.jfnkLambda > 0 && s.jfnkLambda < 1e-2)) fail(file, "'Solver/Jacobian-Free Perturbation' must be in (0, 0.01)");
+  if (s.jacobian != "Assembled" && s.continuation == "Arc Length")
+    fail(file, "'Solver/Continuation' = Arc Length solves its bordered systems with the assembled tangent; set 'Solver/Jacobian' = Assembled");
   if (s.jacobian != "Assembled" && s.linearSolver->get<std::string>("Linear Solver Type", "Belos") != "Belos")
     fail(file, "'Solver/Jacobian' = " + s.jacobian + " needs a Krylov solver (Linear Solver Type = Belos); the preset '" +
                    s.linearSolverName + "' is a direct solver, which needs the assembled matrix");

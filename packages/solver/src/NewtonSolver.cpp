@@ -18,14 +18,65 @@
 
 namespace perinox {
 
+std::string stagnationDiagnosis(const std::vector<double>& r, int window) {
+  // Stagnation: the last `window` residuals all stay above half of the best residual reached
+  // before them. Comparing with the best earlier value (not the one just before the window)
+  // keeps round-off noise around a floor from hiding the stagnation.
+  if (window < 1 || static_cast<int>(r.size()) < window + 1) return "";
+  const std::size_t n = r.size();
+  double best = r[0];
+  for (std::size_t k = 0; k + window < n; ++k) best = std::min(best, r[k]);
+  double lo = r[n - 1], hi = r[n - 1];
+  for (std::size_t k = n - window; k < n; ++k) {
+    if (!std::isfinite(r[k])) return "";
+    lo = std::min(lo, r[k]);
+    hi = std::max(hi, r[k]);
+  }
+  if (!(lo > 0.5 * best)) return "";
+  std::ostringstream s;
+  s << "residual stagnation: in the last " << window << " iterations the normalised residual stayed between " << lo
+    << " and " << hi << ", never below half of the best earlier value " << best;
+  return s.str();
+}
+
 namespace {
+
+/// NOX's Thyra group, counting the Newton systems its linear solver did not solve (Belos
+/// reports SOLVE_STATUS_UNCONVERGED at its iteration limit or on breakdown; NOX then carries
+/// on with the inexact direction because of "Rescue Bad Newton Solve").
+class RecordingGroup final : public NOX::Thyra::Group {
+ public:
+  using NOX::Thyra::Group::Group;
+  NOX::Abstract::Group::ReturnType computeNewton(Teuchos::ParameterList& p) override {
+    const auto st = NOX::Thyra::Group::computeNewton(p);
+    // A solve counts as failed when its status is not Ok and its achieved relative residual is
+    // above the request (Belos may flag "unconverged" after reaching it; see ArcLength.cpp).
+    const bool bad = st != NOX::Abstract::Group::Ok || last_linear_solve_status_ != NOX::Abstract::Group::Ok;
+    if (bad && !(last_linear_solve_achieved_tol_ >= 0 && last_linear_solve_achieved_tol_ <= tolerance_)) {
+      ++failures_;
+      lastTol_ = last_linear_solve_achieved_tol_;
+      lastIters_ = last_linear_solve_num_iters_;
+    }
+    return st;
+  }
+  void setTolerance(double t) { tolerance_ = t; }
+  int failures() const { return failures_; }
+  double lastAchieved() const { return lastTol_; }
+  int lastIterations() const { return lastIters_; }
+
+ private:
+  int failures_ = 0;
+  double tolerance_ = 0;
+  double lastTol_ = 0;
+  int lastIters_ = 0;
+};
 
 /// |R| / scale <= tol, with scale = |f_ext| or, when f_ext = 0, the reaction norm at the
 /// current iterate. Records the normalised residual of every iteration.
 class NormalizedResidualTest final : public NOX::StatusTest::Generic {
  public:
-  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol, double floorFactor)
-      : ev_(ev), tol_(tol), floor_(floorFactor * ev.roundoffScale()) {}
+  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol, double floorFactor, int stagnationStop)
+      : floor_(floorFactor * ev.roundoffScale()), ev_(ev), tol_(tol), stagnationStop_(stagnationStop) {}
 
   NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver,
                                           NOX::StatusTest::CheckType) override {
@@ -48,6 +99,10 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
     history_[solver.getNumIterations()] = r;
     atFloor_ = std::isfinite(r) && r > tol_ && normF <= floor_;
     status_ = (std::isfinite(r) && (r <= tol_ || atFloor_)) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
+    if (status_ == NOX::StatusTest::Unconverged && stagnationStop_ > 0) {
+      stagnation_ = stagnationDiagnosis(history(), stagnationStop_);
+      if (!stagnation_.empty()) status_ = NOX::StatusTest::Failed;
+    }
     return status_;
   }
   NOX::StatusTest::StatusType getStatus() const override { return status_; }
@@ -64,12 +119,15 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
   double scale() const { return scale_; }
   bool atFloor() const { return atFloor_; }
   double floorNormalised() const { return floor_ / scale_; }
+  const std::string& stagnation() const { return stagnation_; }
 
  private:
   double floor_ = 0.0;
   bool atFloor_ = false;
   const PeridynamicEvaluator& ev_;
   double tol_;
+  int stagnationStop_ = 0;
+  std::string stagnation_;
   NOX::StatusTest::StatusType status_ = NOX::StatusTest::Unevaluated;
   std::map<int, double> history_;
   bool reaction_ = false;
@@ -101,9 +159,10 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
 
   auto x0 = x.clone_v();
   NOX::Thyra::Vector guess(x0);
-  Teuchos::RCP<NOX::Thyra::Group> group;
+  Teuchos::RCP<RecordingGroup> group;
 
-  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance, options_.floorFactor));
+  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance, options_.floorFactor,
+                                                              options_.stagnationStop));
   auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
   auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
   auto combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
@@ -115,14 +174,15 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   try {
     const JacobianMode mode = evaluator_->jacobianMode();
     if (mode == JacobianMode::Assembled) {
-      group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_));
+      group = Teuchos::rcp(new RecordingGroup(guess, evaluator_));
     } else {
       // Matrix-free: W_op is the evaluator's analytic product or its finite difference of f;
       // the preconditioner, when there is one, is built by the model (W_prec).
-      group = Teuchos::rcp(new NOX::Thyra::Group(guess, evaluator_, evaluator_->create_W_op(), evaluator_->get_W_factory(),
+      group = Teuchos::rcp(new RecordingGroup(guess, evaluator_, evaluator_->create_W_op(), evaluator_->get_W_factory(),
                                                  evaluator_->create_W_prec(),
                                                  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
     }
+    group->setTolerance(options_.linearTolerance);
     auto solver = NOX::Solver::buildSolver(group, combo, params);
     status = solver->solve();
     const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());
@@ -150,17 +210,28 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   result.floorNormalised = residualTest->floorNormalised();
   result.converged = result.failure.empty() && status == NOX::StatusTest::Converged &&
                      residualTest->getStatus() == NOX::StatusTest::Converged;
+  result.linearFailures = group.is_null() ? 0 : group->failures();
   if (!result.converged && result.failure.empty()) {
+    // The most specific cause first: a linear solver that did not solve the Newton systems
+    // makes every later symptom (stagnation, iteration limit) a consequence.
     std::ostringstream s;
+    const double last = result.residuals.empty() ? NAN : result.residuals.back();
+    const std::string stagnation =
+        !residualTest->stagnation().empty() ? residualTest->stagnation() : stagnationDiagnosis(result.residuals, 5);
     if (finite->getStatus() == NOX::StatusTest::Failed)
       s << "the residual became NaN or infinite";
+    else if (result.linearFailures > 0)
+      s << "the linear solver did not converge in " << result.linearFailures
+        << " Newton iteration(s) (Krylov iteration limit or breakdown; last achieved relative residual "
+        << group->lastAchieved() << " after " << group->lastIterations()
+        << " iterations): the Newton directions were inexact (last normalised residual " << last << ")";
+    else if (!stagnation.empty())
+      s << stagnation;
     else if (maxIters->getStatus() == NOX::StatusTest::Failed)
-      s << "no convergence in " << options_.maxIterations << " Newton iterations (last normalised residual "
-        << (result.residuals.empty() ? NAN : result.residuals.back()) << ")";
+      s << "no convergence in " << options_.maxIterations << " Newton iterations (last normalised residual " << last << ")";
     else
       s << "the nonlinear solver stopped without convergence (line search or linear solve failed; last "
-           "normalised residual "
-        << (result.residuals.empty() ? NAN : result.residuals.back()) << ")";
+           "normalised residual " << last << ")";
     result.failure = s.str();
   }
   return result;

@@ -65,6 +65,18 @@ struct SolverSettings {
   bool stabilityCheck = false;       // negative pivots of the tangent after each step
   double floorFactor = 2.0;          // see NewtonOptions::floorFactor             // extrapolate the previous increment to start each step
   int verbosity = 0;
+  int stagnationStop = 0;            // > 0: stop a Newton solve whose residual has not halved in this many iterations
+  std::string continuation = "Load Stepping";  // or "Arc Length"
+  struct ArcLength {
+    double initial = 0.05;           // arc length of the first step (metric: see Scene.cpp)
+    double minimum = 1e-4;
+    double maximum = 0.5;
+    int maxSteps = 100;
+    double targetLoadFactor = 1.0;   // stop when the load factor reaches it
+    double targetDeflection = 0.0;   // stop when |deflection| reaches it (0: off)
+    std::string deflectionProbe;     // Displacement probe giving the deflection
+    int deflectionComponent = 1;
+  } arc;
   Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
   std::string linearSolverName;                       // preset name or "custom"
   std::string jacobian = "Assembled";                 // Assembled, Matrix-Free, Jacobian-Free

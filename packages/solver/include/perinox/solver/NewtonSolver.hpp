@@ -19,6 +19,9 @@ struct NewtonOptions {
   double linearTolerance = 1e-12;  // relative tolerance handed to iterative linear solvers
   int verbosity = 0;               // NOX's own output (0 = quiet)
   double floorFactor = 10.0;       // also converged when |R| <= floorFactor * roundoffScale (0: off)
+  int stagnationStop = 0;          // > 0: stop early with "residual stagnation" when the residual
+                                   // has not halved over this many iterations (0: only diagnose a
+                                   // failed solve afterwards, over 5 iterations)
 };
 
 struct NewtonResult {
@@ -29,8 +32,13 @@ struct NewtonResult {
   double normaliser = 1.0;
   bool atRoundoffFloor = false;    // converged on the round-off floor, not on the tolerance
   double floorNormalised = 0.0;    // the floor, normalised like the residuals
+  int linearFailures = 0;          // Newton solves whose linear solver reported no convergence
   std::string failure;             // why it failed (empty when converged)
 };
+
+/// "residual stagnation: ..." when the last `window` normalised residuals all stayed above half of
+/// the best residual before them (Newton near a solution halves it every iteration), else "".
+std::string stagnationDiagnosis(const std::vector<double>& residuals, int window);
 
 class NewtonSolver {
  public:
