@@ -154,7 +154,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   so.set("Load Steps", 10, "equal load increments to load factor 1");
   so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
   so.set("Max Newton Iterations", 25, "per load step");
-  so.set("Line Search", "Full Step", "globalisation: Full Step, Backtrack or Polynomial (NOX line searches)");
+  so.set("Line Search", "Full Step", "globalisation: Full Step, Backtrack or Polynomial (NOX line searches), or Trust Region / Inexact Trust Region (NOX's dogleg trust-region solvers; need the assembled Jacobian)");
   so.set("Adaptive Steps", false, "grow the load increment by 1.5 after steps needing at most 'Easy Iterations' Newton iterations (up to 'Max Increment'); cut-backs still halve it");
   so.set("Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations");
   so.set("Max Increment", 0.25, "adaptive stepping: largest load increment");
@@ -817,10 +817,9 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   s.maxIterations = so.get<int>("Max Newton Iterations");
   if (s.maxIterations < 1) fail(file, "'Solver/Max Newton Iterations' must be at least 1");
   s.lineSearch = so.get<std::string>("Line Search");
-  if (s.lineSearch == "Trust Region")
-    fail(file, "'Solver/Line Search' = Trust Region is not available: NOX's trust-region solvers crash on the Thyra group of this Trilinos build (docs/trilinos-notes.md); use Backtrack or Polynomial");
-  if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial")
-    fail(file, "'Solver/Line Search' must be Full Step, Backtrack or Polynomial");
+  if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial" &&
+      s.lineSearch != "Trust Region" && s.lineSearch != "Inexact Trust Region")
+    fail(file, "'Solver/Line Search' must be Full Step, Backtrack, Polynomial, Trust Region or Inexact Trust Region");
   s.adaptive = so.get<bool>("Adaptive Steps");
   s.easyIterations = so.get<int>("Easy Iterations");
   s.maxIncrement = so.get<double>("Max Increment");
@@ -909,6 +908,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
   s.jfnkLambda = so.get<double>("Jacobian-Free Perturbation");
   if (!(s.jfnkLambda > 0 && s.jfnkLambda < 1e-2)) fail(file, "'Solver/Jacobian-Free Perturbation' must be in (0, 0.01)");
+  if (s.jacobian != "Assembled" && s.lineSearch.find("Trust Region") != std::string::npos)
+    fail(file, "'Solver/Line Search' = " + s.lineSearch + " needs the transpose of the Jacobian; set 'Solver/Jacobian' = Assembled");
   if (s.jacobian != "Assembled" && s.continuation == "Arc Length")
     fail(file, "'Solver/Continuation' = Arc Length solves its bordered systems with the assembled tangent; set 'Solver/Jacobian' = Assembled");
   if (s.jacobian != "Assembled" && s.linearSolver->get<std::string>("Linear Solver Type", "Belos") != "Belos")

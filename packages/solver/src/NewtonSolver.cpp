@@ -47,6 +47,8 @@ namespace {
 class RecordingGroup final : public NOX::Thyra::Group {
  public:
   using NOX::Thyra::Group::Group;
+  RecordingGroup(const RecordingGroup& source, NOX::CopyType type)
+      : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_) {}
   NOX::Abstract::Group::ReturnType computeNewton(Teuchos::ParameterList& p) override {
     const auto st = NOX::Thyra::Group::computeNewton(p);
     // A solve counts as failed when its status is not Ok and its achieved relative residual is
@@ -58,6 +60,34 @@ class RecordingGroup final : public NOX::Thyra::Group {
       lastIters_ = last_linear_solve_num_iters_;
     }
     return st;
+  }
+  /// Steepest-descent direction for the trust-region solvers: g = J^T F. NOX's Thyra group
+  /// does not implement it; the assembled Jacobian supports the transpose product.
+  NOX::Abstract::Group::ReturnType computeGradient() override {
+    if (is_valid_gradient_dir_) return NOX::Abstract::Group::Ok;
+    if (!is_valid_f_ || !is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS))
+      return NOX::Abstract::Group::BadDependency;
+    ::Thyra::apply(*lop_, ::Thyra::TRANS, f_vec_->getThyraVector(), gradient_vec_->getThyraRCPVector().ptr());
+    is_valid_gradient_dir_ = true;
+    return NOX::Abstract::Group::Ok;
+  }
+  /// J v with the Jacobian operator of this group's last computeJacobian. NOX's version refuses
+  /// when another group copy holds the shared solver object, which the trust-region solvers
+  /// provoke by copying groups between the Newton and Cauchy directions.
+  NOX::Abstract::Group::ReturnType applyJacobian(const NOX::Abstract::Vector& in, NOX::Abstract::Vector& out) const override {
+    if (!is_valid_jacobian_) return NOX::Abstract::Group::BadDependency;
+    ::Thyra::apply(*lop_, ::Thyra::NOTRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
+                   dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
+    return NOX::Abstract::Group::Ok;
+  }
+  NOX::Abstract::Group::ReturnType applyJacobianTranspose(const NOX::Abstract::Vector& in, NOX::Abstract::Vector& out) const override {
+    if (!is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS)) return NOX::Abstract::Group::BadDependency;
+    ::Thyra::apply(*lop_, ::Thyra::TRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
+                   dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
+    return NOX::Abstract::Group::Ok;
+  }
+  Teuchos::RCP<NOX::Abstract::Group> clone(NOX::CopyType type) const override {
+    return Teuchos::rcp(new RecordingGroup(*this, type));
   }
   void setTolerance(double t) { tolerance_ = t; }
   int failures() const { return failures_; }
@@ -142,8 +172,14 @@ NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const N
 NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   NewtonResult result;
   auto params = Teuchos::rcp(new Teuchos::ParameterList("NOX"));
-  params->set("Nonlinear Solver", "Line Search Based");
-  params->sublist("Line Search").set("Method", options_.lineSearch);
+  if (options_.lineSearch == "Trust Region") {
+    params->set("Nonlinear Solver", "Trust Region Based");
+  } else if (options_.lineSearch == "Inexact Trust Region") {
+    params->set("Nonlinear Solver", "Inexact Trust Region Based");
+  } else {
+    params->set("Nonlinear Solver", "Line Search Based");
+    params->sublist("Line Search").set("Method", options_.lineSearch);
+  }
   auto& dir = params->sublist("Direction");
   dir.set("Method", "Newton");
   auto& newton = dir.sublist("Newton");
@@ -183,6 +219,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
                                                  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
     }
     group->setTolerance(options_.linearTolerance);
+    group->computeF();  // the inexact trust-region solver asks for |F| before computing it
     auto solver = NOX::Solver::buildSolver(group, combo, params);
     status = solver->solve();
     const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());
