@@ -37,7 +37,7 @@ o = ap.parse_args()
 
 ref = M.read_csv(o.fem)
 probe, s_key, u_key = ("axis_1", "x", "ux") if o.case == "plate" else ("line", "y", "uz")
-lo, hi = o.window or ((20.0, 48.0) if o.case == "plate" else (10.0, 70.0))
+lo, hi = o.window or ((20.0, 44.0) if o.case == "plate" else (10.0, 70.0))
 
 
 def measures(d):
