@@ -9,6 +9,8 @@ Runs the driver on
                                   (C1, C2 from seed Table 1 for n = 500);
   xml/plate_square_opening.xml    with None and Stress Points (the seed compares only these two
                                   in 2D and 3D);
+  xml/plate_square_opening_half.xml  the same plate modelled across y = 0 (axis 1 an interior
+                                  row), None and Stress Points;
   xml/brick3d.xml                 with None and Stress Points;
 and with --adr also the bar and the plate with stress points under the explicit ADR solver.
 Writes into --out:
@@ -16,9 +18,11 @@ Writes into --out:
   seed001_fig9_plate.png     u_x over the plate, no control against stress points
   seed001_fig10_plate.png    u_x and sigma_xx along axis 1 (y = 0) against the FEM reference
                              (validation/reference/plate_square_opening_fem.csv), a_u, a_sigma
+  seed001_fig9_plate_half.png, seed001_fig10_plate_half.png   the same for the half plate
   seed001_fig12_brick.png    u_z on the bottom face, no control against stress points
   seed001_fig13_brick.png    u_z along x = 40, z = 0 against FEM (brick3d_fem.csv), a_w
-  seed001_bar.csv, seed001_plate_axis1.csv, seed001_brick_line.csv   the plotted data
+  seed001_bar.csv, seed001_plate_axis1.csv, seed001_plate_half_axis1.csv,
+  seed001_brick_line.csv     the plotted data
   seed001_measures.csv       per scene and control: the error against the reference and the
                              oscillation measure (tools/seed001_measures.py) on the windows
                              used by the tests
@@ -132,15 +136,17 @@ def write_cols(path, cols):
             f.write(",".join("%.9g" % cols[k][i] for k in keys) + "\n")
 
 
-def plate(a, work, out, meas):
+def plate(a, work, out, meas, half=False):
     ref = M.read_csv(os.path.join(ROOT, "validation", "reference", "plate_square_opening_fem.csv"))
-    controls = ["None", "Stress Points"] + (["Stress Points ADR"] if a.adr else [])
+    controls = ["None", "Stress Points"] + (["Stress Points ADR"] if a.adr and not half else [])
+    scene = "plate_square_opening_half.xml" if half else "plate_square_opening.xml"
+    sfx = "_half" if half else ""
     fig, ax = plt.subplots(2, 2, figsize=(11, 7.5))
     fig9, ax9 = plt.subplots(1, 2, figsize=(11, 5))
     cols = {}
     for c in controls:
         sets = ["Model/Zero-Energy Control=%s" % c.replace(" ADR", "")] + (["Solver/Method=ADR"] if "ADR" in c else [])
-        d = run(a.build, "plate_square_opening.xml", os.path.join(work, "plate_" + tag(c)), sets)
+        d = run(a.build, scene, os.path.join(work, "plate" + sfx + "_" + tag(c)), sets)
         p = M.profile(d, "axis_1", "x")
         x = p["x"]
         uf, sf = M.at(ref["x"], ref["ux"], x), M.at(ref["x"], ref["sxx"], x)
@@ -151,10 +157,10 @@ def plate(a, work, out, meas):
         ax[1, 1].semilogy(x, np.maximum(M.amplitude(p["sxx"], sf), 1e-8), mk + "-", ms=4, lw=0.8, color=col, label=lab)
         cols["x"], cols["ux FEM"], cols["sxx FEM"] = x, uf, sf
         cols["ux " + lab], cols["sxx " + lab] = p["ux"], p["sxx"]
-        meas.append(("plate axis 1 x %g..%g" % PLATE_WIN, c,
+        meas.append(("plate%s axis 1 x %g..%g" % ((sfx,) + PLATE_WIN), c,
                      "max |ux-FEM|/max|ux FEM|", M.max_rel(x, p["ux"], uf, *PLATE_WIN),
                      "ux zigzag", M.zigzag(x, p["ux"], uf, *PLATE_WIN)))
-        meas.append(("plate axis 1 x %g..%g" % PLATE_WIN, c,
+        meas.append(("plate%s axis 1 x %g..%g" % ((sfx,) + PLATE_WIN), c,
                      "max |sxx-FEM|/max|sxx FEM|", M.max_rel(x, p["sxx"], sf, *PLATE_WIN),
                      "sxx zigzag", M.zigzag(x, p["sxx"], sf, *PLATE_WIN)))
         if c in ("None", "Stress Points"):
@@ -173,15 +179,16 @@ def plate(a, work, out, meas):
         A.set_xlabel("x [mm] (y = 0)")
         A.set_ylabel(yl)
         A.legend(fontsize=7)
-    fig.suptitle("Seed 001 Fig. 10: quarter plate with a square opening, h = 2 mm")
+    what = "half plate (axis 1 an interior row)" if half else "quarter plate"
+    fig.suptitle("Seed 001 Fig. 10: %s with a square opening, h = 2 mm" % what)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "seed001_fig10_plate.png"), dpi=120)
-    fig9.suptitle("Seed 001 Fig. 9: u_x of the quarter plate")
+    fig.savefig(os.path.join(out, "seed001_fig10_plate%s.png" % sfx), dpi=120)
+    fig9.suptitle("Seed 001 Fig. 9: u_x of the %s" % what)
     fig9.tight_layout()
-    fig9.savefig(os.path.join(out, "seed001_fig9_plate.png"), dpi=120)
+    fig9.savefig(os.path.join(out, "seed001_fig9_plate%s.png" % sfx), dpi=120)
     plt.close(fig)
     plt.close(fig9)
-    write_cols(os.path.join(out, "seed001_plate_axis1.csv"), cols)
+    write_cols(os.path.join(out, "seed001_plate%s_axis1.csv" % sfx), cols)
 
 
 def brick(a, work, out, meas):
@@ -231,12 +238,13 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "figures"))
     ap.add_argument("--work", default="/tmp/seed001_runs", help="folder for the driver's output folders")
     ap.add_argument("--adr", action="store_true", help="also the bar and the plate with stress points under ADR")
-    ap.add_argument("--only", choices=("bar", "plate", "brick"), action="append")
+    ap.add_argument("--only", choices=("bar", "plate", "plate_half", "brick"), action="append")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     os.makedirs(a.work, exist_ok=True)
     meas = []
-    for name, fn in (("bar", bar), ("plate", plate), ("brick", brick)):
+    plate_half = lambda a_, w_, o_, m_: plate(a_, w_, o_, m_, half=True)
+    for name, fn in (("bar", bar), ("plate", plate), ("plate_half", plate_half), ("brick", brick)):
         if not a.only or name in a.only:
             print(name)
             fn(a, a.work, a.out, meas)
