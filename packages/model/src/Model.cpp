@@ -233,25 +233,64 @@ struct ImplD final : Model::Impl {
     }
   }
 
+  /// Per particle: F and Cauchy stress. With stress points (seed 001), the particle's values are
+  /// the averages over its stress points, each weighted by the volume of the bonds it owns
+  /// (sum of V_j): F_p = (sum_{j in p} Y_j (x) xi_j V_j) K_p^-1 and sigma_p = sigma(F_p). On a
+  /// uniform nearest-neighbour lattice the weights are equal (D bonds each). A particle with one
+  /// stress point (defective family) reports that one. The stress carries the particle's modulus
+  /// scale (the Cauchy stress of both materials is linear in it).
   std::vector<ParticleOutput> outputs(const Model& model, const std::vector<double>& u) const override {
     const LocalParticles& p = model.particles();
     std::vector<ParticleOutput> out(p.numOwned);
+    const StressPointEffect<D>* sp = nullptr;
+    for (const auto& e : effects)
+      if (const auto* q = dynamic_cast<const StressPointEffect<D>*>(e.get())) sp = q;
     BondWork<D> w;
+    std::vector<int> grp;
     for (int i = 0; i < p.numOwned; ++i) {
       if (model.detached(i)) {
         out[i].cauchy.setZero();
         continue;
       }
       kinematics(p, u, i, w);
+      const double scale = p.modulusScale.empty() ? 1.0 : p.modulusScale[i];
       Mat F = w.F;
       Eigen::Matrix3d s;
-      out[i].F.setIdentity();
-      out[i].F.template topLeftCorner<D, D>() = F;
       // An output state is a converged one, where every F is valid; should one not be, write
       // zero stress and flag it rather than a NaN.
-      out[i].valid = model.material().template cauchy<D>(F, s);
-      if (!out[i].valid) s.setZero();
-      out[i].cauchy = s;
+      const int ng = sp ? sp->groups(w, grp) : 1;
+      if (ng > 1) {
+        Mat Fsum = Mat::Zero();
+        Eigen::Matrix3d ssum = Eigen::Matrix3d::Zero();
+        double vsum = 0;
+        bool valid = true;
+        for (int g = 0; g < ng; ++g) {
+          Mat K = Mat::Zero(), FK = Mat::Zero();
+          double v = 0;
+          for (int l = 0; l < w.m; ++l) {
+            if (grp[l] != g) continue;
+            K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
+            FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
+            v += w.Vj[l];
+          }
+          const Mat Fp = FK * K.inverse();
+          Eigen::Matrix3d sp3;
+          const bool ok = model.material().template cauchy<D>(Fp, sp3);
+          valid = valid && ok;
+          Fsum += v * Fp;
+          if (ok) ssum += v * sp3;
+          vsum += v;
+        }
+        F = Fsum / vsum;
+        out[i].valid = valid;
+        s = valid ? Eigen::Matrix3d(ssum / vsum) : Eigen::Matrix3d::Zero();
+      } else {
+        out[i].valid = model.material().template cauchy<D>(F, s);
+        if (!out[i].valid) s.setZero();
+      }
+      out[i].F.setIdentity();
+      out[i].F.template topLeftCorner<D, D>() = F;
+      out[i].cauchy = scale * s;
     }
     return out;
   }

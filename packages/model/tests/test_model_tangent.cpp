@@ -478,3 +478,44 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
     }
   }
 }
+
+// Stress output with stress points (seed 001: "reported stress is the average over a particle's
+// stress points"): in 1D the left stress point owns the bond to i-1 and the right one the bond
+// to i+1, so at a kink of the displacement the particle's F and Cauchy stress must be the means
+// of sigma(F_left) and sigma(F_right) (equal bond volumes), times the particle's modulus scale.
+// Hencky makes sigma nonlinear in F, so the mean of the stresses differs from the stress of the
+// mean F (the plain correspondence output), and the test tells the two apart.
+TEST(Model, StressPointOutputIsTheStressPointAverage) {
+  Discretization d = smallLattice(1, 1.015, 12);
+  MaterialSpec m = material(1);
+  m.kind = MaterialKind::Hencky;
+  auto lp = localParticles(d, 0, d.size());
+  for (int i = 0; i < d.size(); ++i) lp.modulusScale.push_back(1.0 + 0.25 * i);
+  Model sp(m, lp);
+  sp.enableStressPoints();
+  Model plain(m, lp);
+  plain.enableCorrespondence();
+  const int k = 6;
+  const double a = 0.05, b = 0.30;  // strains left and right of particle k
+  std::vector<double> u(d.size());
+  for (int i = 0; i < d.size(); ++i) {
+    const double x = d.X[i][0] - d.X[k][0];
+    u[i] = x <= 0 ? a * x : b * x;
+  }
+  const auto outS = sp.outputs(u), outP = plain.outputs(u);
+  Material mat(m);
+  Eigen::Matrix3d sl, sr, sm;
+  ASSERT_TRUE(mat.cauchy<1>(MatD<1>::Constant(1.0 + a), sl));
+  ASSERT_TRUE(mat.cauchy<1>(MatD<1>::Constant(1.0 + b), sr));
+  ASSERT_TRUE(mat.cauchy<1>(MatD<1>::Constant(1.0 + 0.5 * (a + b)), sm));
+  const double scale = 1.0 + 0.25 * k;
+  EXPECT_NEAR(outS[k].F(0, 0), 1.0 + 0.5 * (a + b), 1e-12);
+  EXPECT_NEAR(outS[k].cauchy(0, 0), scale * 0.5 * (sl(0, 0) + sr(0, 0)), 1e-9 * std::abs(sr(0, 0)));
+  EXPECT_NEAR(outP[k].cauchy(0, 0), scale * sm(0, 0), 1e-9 * std::abs(sr(0, 0)));
+  EXPECT_GT(std::abs(outS[k].cauchy(0, 0) - outP[k].cauchy(0, 0)), 1e-3 * std::abs(sr(0, 0)))
+      << "the average of the stress-point stresses must differ from the stress of the mean F";
+  // Away from the kink both stress points see the same F: the output is that state's stress.
+  Eigen::Matrix3d sb;
+  ASSERT_TRUE(mat.cauchy<1>(MatD<1>::Constant(1.0 + b), sb));
+  EXPECT_NEAR(outS[k + 3].cauchy(0, 0), (1.0 + 0.25 * (k + 3)) * sb(0, 0), 1e-9 * std::abs(sb(0, 0)));
+}

@@ -1,0 +1,99 @@
+#!/usr/bin/env python3
+"""Assembled against matrix-free Newton-Krylov, end to end: wall time, Newton iterations, the
+sparse-matrix bytes held and the peak resident memory of the perinox driver, on one scene as the
+particle count grows. Prints a table with ratios to the first solver and writes CSV; times are
+single runs on a shared machine (the CSV keeps them all), asserts nothing.
+
+    tools/bench_solvers.py [--sizes 40x20 80x40 ...] [--horizon 3.015] [--presets direct mf-ilu ...]
+                           [--timeout 900] --out out/bench_solvers
+
+Default scene: xml/tension_block.xml (displacement-driven uniaxial tension of a Hencky block,
+fictitious layers at both ends), one load step, delta = 3.015 dx.
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run(perinox, scene, out, sets, timeout):
+    cmd = [perinox, "run", scene, "--output", out, "--quiet"]
+    for s in sets:
+        cmd += ["--set", s]
+    env = dict(os.environ, PERINOX_PLOT_SCRIPT="")
+    t0 = time.time()
+    try:
+        subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"timeout": True, "wall": time.time() - t0}
+    try:
+        with open(os.path.join(out, "summary.json")) as f:
+            j = json.load(f)
+    except OSError:
+        return {"failed": True, "wall": time.time() - t0}
+    return {
+        "converged": j["converged"],
+        "wall": j["wall_time_s"],
+        "newton": sum(s["newton_iterations"] for s in j["steps"]),
+        "steps": len(j["steps"]),
+        "matrix_mib": j.get("matrix_bytes", 0) / 2**20,
+        "rss_mib": j.get("peak_rss_mib_max_rank", float("nan")),
+        "probe": next((h[-1].get("reaction", h[-1].get("displacement")) for h in j["probes"].values() if h), None),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scene", default=os.path.join(ROOT, "xml", "tension_block.xml"))
+    ap.add_argument("--sizes", nargs="+", default=["40x20", "80x40", "160x80"])
+    ap.add_argument("--horizon", default="3.015")
+    ap.add_argument("--presets", nargs="+", default=["direct", "mf-muelu", "mf-ilu", "jfnk-ilu"])
+    ap.add_argument("--timeout", type=float, default=900)
+    ap.add_argument("--out", default="out/bench_solvers")
+    ap.add_argument("--perinox", default=os.path.join(ROOT, "build", "drivers", "perinox"))
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    rows = []
+    print(f"# {os.path.relpath(a.scene, ROOT)}, delta = {a.horizon} dx, one load step; ratios to {a.presets[0]}")
+    print(f"{'particles':>10} {'preset':>18} {'conv':>5} {'wall s':>9} {'Newton':>6} {'matrix MiB':>10} {'peak MiB':>9}"
+          f" {'time ratio':>10} {'mem ratio':>9}")
+    for size in a.sizes:
+        nx, ny = size.split("x")
+        base = None
+        for preset in a.presets:
+            out = os.path.join(a.out, f"{size}_{preset}")
+            r = run(a.perinox, a.scene, out, [f"Discretization/Particles={{{nx},{ny}}}",
+                                               f"Discretization/Horizon Factor={a.horizon}", "Solver/Load Steps=1",
+                                               f"Solver/Linear Solver Preset={preset}", "Output/Plots=false",
+                                               "Output/VTK=false"], a.timeout)
+            n = int(nx) * int(ny)
+            if r.get("timeout") or r.get("failed"):
+                status = "timeout" if r.get("timeout") else "failed"
+                print(f"{n:>10} {preset:>18} {status:>5} {r['wall']:>9.1f}")
+                rows.append({"particles": n, "preset": preset, "status": status, "wall_s": r["wall"]})
+                continue
+            if base is None:
+                base = r
+            tr = base["wall"] / r["wall"] if r["wall"] > 0 else float("nan")
+            mr = base["rss_mib"] / r["rss_mib"] if r["rss_mib"] > 0 else float("nan")
+            print(f"{n:>10} {preset:>18} {str(r['converged']):>5} {r['wall']:>9.2f} {r['newton']:>6} {r['matrix_mib']:>10.1f}"
+                  f" {r['rss_mib']:>9.0f} {tr:>10.2f} {mr:>9.2f}", flush=True)
+            rows.append({"particles": n, "preset": preset, "status": "converged" if r["converged"] else "not converged",
+                         "wall_s": r["wall"], "newton_iterations": r["newton"], "matrix_mib": r["matrix_mib"],
+                         "peak_rss_mib": r["rss_mib"], "speedup_vs_first": tr, "memory_ratio_first_over_this": mr})
+    with open(os.path.join(a.out, "bench_solvers.csv"), "w", newline="") as f:
+        keys = ["particles", "preset", "status", "wall_s", "newton_iterations", "matrix_mib", "peak_rss_mib",
+                "speedup_vs_first", "memory_ratio_first_over_this"]
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+    print(f"# written {os.path.join(a.out, 'bench_solvers.csv')}")
+
+
+if __name__ == "__main__":
+    main()
