@@ -7,8 +7,10 @@ stabilisation and solver, for a scene with a reference value.
 Default study: the clamped beam of seed 000 (4.2) against the converged CalculiX mid-span
 deflection (-3.127274 mm, validation/reference/clamped_beam_fem.csv), over particles
 3x75 ... 9x225, horizons 1.015 / 2.015 dx, G = 0 / 0.01, and solvers: Newton with the direct
-solver, Newton with GMRES + ILU, Newton with GMRES + MueLu, and explicit ADR (small cases
-only: it needs tens of thousands of iterations). Each run is the perinox driver; wall time is
+solver, Newton with GMRES + ILU, Newton with GMRES + MueLu, matrix-free Newton-Krylov (analytic
+J v with MueLu on the direct-neighbour Jacobian, or with ILU of the assembled one), Jacobian-free
+Newton-Krylov, and explicit ADR (small cases only: it needs tens of thousands of iterations).
+Peak memory (the driver's resident high-water mark) is recorded beside the time. Each run is the perinox driver; wall time is
 the driver's own (summary.json, set-up included), measured one run at a time.
 Writes OUT/accuracy_cost.csv and OUT/accuracy_cost.png (log-log error against time; the
 lower-left frontier is what a user chooses from).
@@ -45,6 +47,9 @@ def main():
     solvers = [("Newton/direct", ["Solver/Linear Solver Preset=direct"]),
                ("Newton/GMRES+ILU", ["Solver/Linear Solver Preset=gmres-ilu"]),
                ("Newton/GMRES+MueLu", ["Solver/Linear Solver Preset=gmres-muelu"]),
+               ("matrix-free/MueLu", ["Solver/Linear Solver Preset=mf-muelu"]),
+               ("matrix-free/ILU(asm)", ["Solver/Linear Solver Preset=mf-assembled-ilu"]),
+               ("Jacobian-free/ILU", ["Solver/Linear Solver Preset=jfnk-ilu"]),
                ("ADR", ["Solver/Method=ADR"])]
     rows = []
     for grid in grids:
@@ -57,6 +62,11 @@ def main():
                     # 7 minutes at 7 x 175): only the two smallest grids.
                     if name == "Newton/GMRES+MueLu" and grid not in ("{75,3}", "{125,5}"):
                         continue
+                    # The matrix-free presets on the slender beam: all grids for the analytic
+                    # product with ILU of the assembled Jacobian; the neighbour-matrix MueLu and the
+                    # Jacobian-free product (more Krylov iterations) on the two smallest.
+                    if name in ("matrix-free/MueLu", "Jacobian-free/ILU") and grid not in ("{75,3}", "{125,5}"):
+                        continue
                     tag = f"{grid}_{h}_{G}_{name}".replace("/", "-").replace("{", "").replace("}", "").replace(",", "x").replace("+", "")
                     s = run(a.perinox, os.path.join(a.out, "runs", tag),
                             [f"Discretization/Particles={grid}", f"Discretization/Horizon Factor={h}", f"Model/G={G}"] + extra)
@@ -65,8 +75,10 @@ def main():
                     iters = sum(st["newton_iterations"] for st in s["steps"])
                     rows.append(dict(particles=grid, horizon=h, G=G, solver=name, converged=s["converged"],
                                      deflection=v, error=err, wall_time_s=s["wall_time_s"], iterations=iters,
-                                     dofs=s["dofs"]))
-                    print(f"{grid:>9} delta {h} G {G:>4} {name:>20}: error {err:.3e}  time {s['wall_time_s']:8.2f} s  iterations {iters}")
+                                     dofs=s["dofs"], peak_rss_mib=s.get("peak_rss_mib_max_rank", float("nan")),
+                                     matrix_mib=s.get("matrix_bytes", 0) / 2**20))
+                    print(f"{grid:>9} delta {h} G {G:>4} {name:>20}: error {err:.3e}  time {s['wall_time_s']:8.2f} s  iterations {iters}"
+                          f"  peak {s.get('peak_rss_mib_max_rank', float('nan')):.0f} MiB", flush=True)
     with open(os.path.join(a.out, "accuracy_cost.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()
@@ -79,7 +91,8 @@ def main():
     except ImportError:
         return
     fig, ax = plt.subplots(figsize=(8, 5.5))
-    markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/GMRES+MueLu": "^", "ADR": "x"}
+    markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/GMRES+MueLu": "^", "matrix-free/MueLu": "v",
+               "matrix-free/ILU(asm)": "D", "Jacobian-free/ILU": "P", "ADR": "x"}
     colours = {"1.015": "C0", "2.015": "C1"}
     for r in rows:
         if not r["converged"]:
