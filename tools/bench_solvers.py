@@ -80,6 +80,11 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = []
+    keys = ["particles", "preset", "status", "wall_s", "newton_iterations", "matrix_mib", "peak_rss_mib",
+            "speedup_vs_first", "memory_ratio_first_over_this"]
+    csv_file = open(os.path.join(a.out, "bench_solvers.csv"), "w", newline="")
+    writer = csv.DictWriter(csv_file, fieldnames=keys)
+    writer.writeheader()
     print(f"# {os.path.relpath(a.scene, ROOT)}, delta = {a.horizon} dx, one load step; ratios to {a.presets[0]}")
     print(f"{'particles':>10} {'preset':>18} {'conv':>5} {'wall s':>9} {'Newton':>6} {'matrix MiB':>10} {'peak MiB':>9}"
           f" {'time ratio':>10} {'mem ratio':>9}")
@@ -99,6 +104,8 @@ def main():
                       "   (lower bounds: stopped at the time limit)", flush=True)
                 rows.append({"particles": n, "preset": preset, "status": status, "wall_s": r["wall"],
                              "peak_rss_mib": r.get("rss_mib", float("nan"))})
+                writer.writerow(rows[-1])
+                csv_file.flush()
                 if base is None:
                     base = {"wall": r["wall"], "rss_mib": r.get("rss_mib", float("nan")), "bound": True}
                 continue
@@ -112,13 +119,9 @@ def main():
             rows.append({"particles": n, "preset": preset, "status": "converged" if r["converged"] else "not converged",
                          "wall_s": r["wall"], "newton_iterations": r["newton"], "matrix_mib": r["matrix_mib"],
                          "peak_rss_mib": r["rss_mib"], "speedup_vs_first": tr, "memory_ratio_first_over_this": mr})
-    with open(os.path.join(a.out, "bench_solvers.csv"), "w", newline="") as f:
-        keys = ["particles", "preset", "status", "wall_s", "newton_iterations", "matrix_mib", "peak_rss_mib",
-                "speedup_vs_first", "memory_ratio_first_over_this"]
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        for r in rows:
-            w.writerow(r)
+            writer.writerow(rows[-1])
+            csv_file.flush()
+    csv_file.close()
     print(f"# written {os.path.join(a.out, 'bench_solvers.csv')}")
 
 
