@@ -70,9 +70,10 @@ def main():
     G = s["scene"].get("G", "?") if isinstance(s.get("scene"), dict) else "?"
     nreal = sum(1 for r in rows if r["fictitious"] == 0)
     state = "converged to the end" if s["converged"] else "stopped: " + s.get("failure", "")[:80]
-    head = "%d particles, %d bonds broken, %d steps, %s" % (nreal, s["broken_bonds_total"], len(s["steps"]), state)
-    scatter(rows, "damage", "damage index phi on the deformed particles (x%g)\n%s" % (a.scale, head),
-            os.path.join(a.out, a.tag + "_damage.png"), a.scale, "jet", 0.0, 1.0)
+    head = "%d particles, %d bonds broken, %d steps, %s" % (nreal, s.get("broken_bonds_total", 0), len(s["steps"]), state)
+    if "broken_bonds_total" in s:  # a run with damage
+      scatter(rows, "damage", "damage index phi on the deformed particles (x%g)\n%s" % (a.scale, head),
+              os.path.join(a.out, a.tag + "_damage.png"), a.scale, "jet", 0.0, 1.0)
     scatter(rows, "ux", "u_x (mm) on the deformed particles (x%g)\n%s" % (a.scale, head),
             os.path.join(a.out, a.tag + "_ux.png"), a.scale, "jet")
     # History: load factor and cumulative broken bonds per step, reaction against load factor.
