@@ -302,7 +302,80 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
 
+  // Re-equilibration after bonds broke, at the load factor lam the evaluator is set to. Newton
+  // from the state before the break first. When the break releases so much that Newton cannot
+  // reach the new equilibrium from there (an inverted F on the way, stagnation), reload the
+  // damaged body in growing sub-steps (the softening law depends only on the current stretch, so
+  // the equilibrium with a given set of intact bonds does not depend on the path): from the state
+  // scaled to half the load, or, if that does not converge, from zero. If the damaged body cannot
+  // carry lam (the reload stalls at a limit point: the snap-back of a running crack under
+  // displacement control), the state at the highest load reached is returned and lam lowered to
+  // it; the load stepping resumes from there (an event-by-event trace of the snap-back).
+  auto reequilibrate = [&](Thyra::VectorBase<double>& xs, double& lam, int& reloads) {
+    auto x0 = xs.clone_v();
+    NewtonResult first = newton.solve(xs);
+    if (first.converged || !scene.problem->damage) return first;
+    int iters = first.iterations;
+    double bestMu = 0;
+    auto xBest = xs.clone_v();
+    NewtonResult bestR;
+    for (double start : {0.5, 0.0}) {
+      Thyra::V_StV(Teuchos::ptrFromRef(xs), start, *x0);
+      double mu = start, inc = 0.25 * (1.0 - start);
+      NewtonResult r;
+      r.converged = true;  // zero load with zero displacement is an equilibrium
+      if (start > 0) {
+        evaluator->setLoadFactor(start * lam);
+        r = newton.solve(xs);
+        iters += r.iterations;
+        if (!r.converged) continue;
+      }
+      auto xc = xs.clone_v();
+      NewtonResult rc = r;
+      while (mu < 1.0 - 1e-12) {
+        const double t = std::min(1.0, mu + inc);
+        evaluator->setLoadFactor(t * lam);
+        Thyra::copy(*xc, Teuchos::ptrFromRef(xs));
+        r = newton.solve(xs);
+        iters += r.iterations;
+        ++reloads;
+        if (r.converged) {
+          mu = t;
+          Thyra::copy(xs, xc.ptr());
+          rc = r;
+          inc *= 1.5;
+        } else if ((inc *= 0.5) < 1e-2) {  // the limit load to 1 %
+          break;
+        }
+      }
+      if (mu > bestMu) {
+        bestMu = mu;
+        Thyra::copy(*xc, xBest.ptr());
+        bestR = rc;
+      }
+      break;  // the sub-stepping ran: its limit is the damaged body's
+    }
+    if (!(bestMu > 0)) {
+      evaluator->setLoadFactor(lam);
+      Thyra::copy(*x0, Teuchos::ptrFromRef(xs));
+      first.iterations = iters;
+      first.failure += " (reloading the damaged body from half and from zero load failed too)";
+      return first;
+    }
+    Thyra::copy(*xBest, Teuchos::ptrFromRef(xs));
+    if (bestMu < 1.0) {
+      if (rank == 0 && !options.quiet)
+        std::cout << "    the damaged body cannot carry load factor " << lam << " (snap-back): equilibrium at "
+                  << bestMu * lam << "\n";
+      lam *= bestMu;
+    }
+    evaluator->setLoadFactor(lam);
+    bestR.iterations = iters;
+    return bestR;
+  };
+
   const int N = scene.solver.loadSteps;
+  int stallBreaks = 0;
   double lambda = 0.0;
   double increment = 1.0 / N;
   int step = 0;
@@ -327,6 +400,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     rec.step = step;
     NewtonResult nr;
     int cut = 0;
+    const double stepIncrement = increment;
     for (;;) {
       const double target = std::min(1.0, lambda + increment);
       evaluator->setLoadFactor(target);
@@ -373,6 +447,39 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         std::cout << "  step " << step << ": " << nr.failure << "; cutting the load increment to "
                   << increment << "\n";
     }
+    // Damage, On Stall = Break Most Stretched: the step cannot be converged even at the smallest
+    // increment (softening bonds snap back under displacement control: there is no equilibrium at a
+    // larger load with all of them intact). Break, at the last converged state, the most stretched
+    // intact bond(s) in the softening band, re-equilibrate at the same load and go on (the bonds past
+    // s_cr then break in the usual loop below). The step is recorded at the unchanged load factor.
+    if (!nr.converged && scene.problem->damage && scene.stallBreak && stallBreaks < scene.maxStallBreaks) {
+      Thyra::copy(*xConverged, x.ptr());
+      evaluator->setLoadFactor(lambda);
+      const auto& ds = scene.problem->damageSpec;
+      double smax = 0;
+      const auto rep = evaluator->breakMostStretched(*x, scene.stallBreakTolerance * (ds.sCr - ds.sMin), smax);
+      if (rep.brokenBonds > 0 || !rep.detached.empty()) {
+        ++stallBreaks;
+        rec.stallBrokenBonds = rep.brokenBonds;
+        rec.stallStretch = smax;
+        rec.brokenBonds += rep.brokenBonds;
+        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        if (rank == 0 && !options.quiet)
+          std::cout << "  step " << step << ": " << nr.failure << "\n  stall at load factor " << lambda << ": broke "
+                    << rep.brokenBonds << " bond(s) at the largest stretch " << smax << " (softening band ["
+                    << ds.sMin << ", " << ds.sCr << ")), re-equilibrating\n";
+        const std::string why = nr.failure;
+        nr = reequilibrate(*x, lambda, rec.reloadSteps);
+        rec.residuals = nr.residuals;
+        if (!nr.converged)
+          nr.failure = "re-equilibration after the stall break (" + why + ") failed: " + nr.failure;
+        increment = stepIncrement;
+      } else {
+        nr.failure += "; no intact bond in the softening band to break ('Damage/On Stall')";
+      }
+    } else if (!nr.converged && scene.problem->damage && scene.stallBreak) {
+      nr.failure += "; 'Damage/Max Stall Breaks' = " + std::to_string(scene.maxStallBreaks) + " reached";
+    }
     rec.cutbacks = cut;
     rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
     rec.newtonIterations = nr.iterations;
@@ -406,7 +513,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
           break;
         }
         ++rec.breakRounds;
-        const NewtonResult re = newton.solve(*x);
+        const NewtonResult re = reequilibrate(*x, lambda, rec.reloadSteps);
         rec.newtonIterations += re.iterations;
         rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
         if (!re.converged) {
@@ -421,6 +528,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         res.failure = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
         break;
       }
+      rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
       rec.elapsed = now() - tStep;
       res.steps.back() = rec;
       if (rank == 0 && !options.quiet && (rec.brokenBonds > 0 || !rec.detached.empty()))
@@ -560,6 +668,11 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                        {"time_s", s.elapsed}});
       if (arcLength) steps.back()["arc_length"] = s.arcLength;
       if (s.negativePivots >= -1) steps.back()["negative_pivots"] = s.negativePivots;
+      if (scene.problem->damage) {
+        steps.back()["stall_broken_bonds"] = s.stallBrokenBonds;
+        steps.back()["reload_steps"] = s.reloadSteps;
+        if (s.stallBrokenBonds > 0) steps.back()["stall_max_stretch"] = s.stallStretch;
+      }
       for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
     }
     j["steps"] = steps;
@@ -567,6 +680,14 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       long long total = 0;
       for (const auto& s : res.steps) total += s.brokenBonds;
       j["broken_bonds_total"] = total;
+      long long stallTotal = 0;
+      int stallSteps = 0;
+      for (const auto& s : res.steps) {
+        stallTotal += s.stallBrokenBonds;
+        stallSteps += s.stallBrokenBonds > 0;
+      }
+      j["stall_broken_bonds_total"] = stallTotal;
+      j["stall_breaks"] = stallSteps;
       j["detached_particles"] = evaluator->detachedParticles();
     }
     json probes = json::object();

@@ -24,6 +24,11 @@ struct StepRecord {
   long long brokenBonds = 0;       // damage: bonds broken after this step converged
   int breakRounds = 0;             // damage: re-equilibrations after breaking
   std::vector<long long> detached; // particles detached in this step
+  long long stallBrokenBonds = 0;  // damage, On Stall = Break Most Stretched: bonds broken because
+                                   // the step could not be converged (included in brokenBonds)
+  double stallStretch = 0;         // the largest stretch at that break
+  int reloadSteps = 0;             // damage: sub-steps of reloading the damaged body when Newton could
+                                   // not re-equilibrate directly after a break
   double arcLength = 0;            // arc-length continuation: the arc of this step
   int negativePivots = -2;         // arc-length continuation with Stability Check: the tangent's
                                    // negative pivots at the converged point (-2: not computed)

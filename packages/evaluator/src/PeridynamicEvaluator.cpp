@@ -640,6 +640,25 @@ PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakBonds(const Thyra::
   const auto u = localDisplacements(x);
   long long local = model_->breakBonds(u);
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
+  detachSingular(x, rep);
+  return rep;
+}
+
+PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakMostStretched(const Thyra::VectorBase<double>& x,
+                                                                          double tol, double& maxStretch) {
+  BreakReport rep;
+  const auto u = localDisplacements(x);
+  const double mine = model_->maxIntactStretch(u);
+  maxStretch = mine;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(maxStretch));
+  if (!problem_->damage || !(maxStretch >= problem_->damageSpec.sMin)) return rep;
+  long long local = model_->breakBondsAbove(u, maxStretch - tol);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
+  detachSingular(x, rep);
+  return rep;
+}
+
+void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep) {
   const int D = problem_->dim();
   const long long n = problem_->disc.size();
   auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
@@ -666,7 +685,6 @@ PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakBonds(const Thyra::
     }
   }
   std::sort(detachedAll_.begin(), detachedAll_.end());
-  return rep;
 }
 
 double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextOwnedFree_->norm2(); }

@@ -135,7 +135,15 @@ Teuchos::RCP<ParameterList> buildSchema() {
   dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
   dm.set("Softening Start", 0.0015, "s_min: bond forces soften from here (0 < s_min < s_cr)");
   dm.set("Beta", 3.0, "steepness of the tanh softening (> 0)");
+  dm.set("Softening", "Paper", "Paper (seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr) or Continuous (the tanh rescaled to be exactly 1 at s_min and 0 at s_cr)");
   dm.set("Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step");
+  dm.set("On Stall", "Stop",
+         "what a load step that fails after all its cut-backs does: Stop (the paper's Fig. 8; the run stops with a diagnosis) or "
+         "Break Most Stretched (break, at the last converged state, the intact bonds whose stretch is within 'Stall Break Tolerance' "
+         "of the largest, if that one is in the softening band, re-equilibrate at the same load and go on: the remedy for a "
+         "snap-back of softening bonds under displacement control; reported per step as stall_broken_bonds)");
+  dm.set("Stall Break Tolerance", 1e-6, "On Stall = Break Most Stretched: bonds within this fraction of (s_cr - s_min) of the largest stretch break together (mirror-image bonds differ by round-off only)");
+  dm.set("Max Stall Breaks", 200, "On Stall = Break Most Stretched: stall breaks allowed in a run");
   s->sublist("Regions", false, "named particle sets");
   s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
   s->sublist("Loads", false, "named loads");
@@ -637,7 +645,24 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
       fail(file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
     if (!(ds.beta > 0)) fail(file, "'Damage/Beta' must be positive");
+    const std::string law = dm.get<std::string>("Softening");
+    if (law == "Paper")
+      problem->damageSpec.softening = DamageSpec::Softening::Paper;
+    else if (law == "Continuous")
+      problem->damageSpec.softening = DamageSpec::Softening::Continuous;
+    else
+      fail(file, "'Damage/Softening' must be Paper or Continuous, not '" + law + "'");
     if (sc.maxBreakRounds < 1) fail(file, "'Damage/Max Break Rounds' must be at least 1");
+    const std::string stall = dm.get<std::string>("On Stall");
+    if (stall == "Break Most Stretched")
+      sc.stallBreak = true;
+    else if (stall != "Stop")
+      fail(file, "'Damage/On Stall' must be Stop or Break Most Stretched, not '" + stall + "'");
+    sc.stallBreakTolerance = dm.get<double>("Stall Break Tolerance");
+    if (!(sc.stallBreakTolerance >= 0 && sc.stallBreakTolerance < 1))
+      fail(file, "'Damage/Stall Break Tolerance' must be in [0, 1)");
+    sc.maxStallBreaks = dm.get<int>("Max Stall Breaks");
+    if (sc.maxStallBreaks < 1) fail(file, "'Damage/Max Stall Breaks' must be at least 1");
   }
 
   // --- regions ---

@@ -1,6 +1,8 @@
 #include "perinox/model/Model.hpp"
 
 #include <cmath>
+#include <algorithm>
+#include <limits>
 #include <sstream>
 
 #include "Effects.hpp"
@@ -334,6 +336,31 @@ void Model::enableDamage(const DamageSpec& d) {
 
 long long Model::breakBonds(const std::vector<double>& u) {
   if (!damage_) return 0;
+  return breakBondsAbove(u, damage_->sCr);
+}
+
+double Model::maxIntactStretch(const std::vector<double>& u) const {
+  const int D = particles_.dim;
+  double best = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < particles_.numOwned; ++i) {
+    if (detached(i)) continue;
+    for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) {
+      const int j = particles_.famIndex[q];
+      double ly2 = 0, lx2 = 0;
+      for (int a = 0; a < D; ++a) {
+        const double xi = particles_.X[j][a] - particles_.X[i][a];
+        const double y = xi + (u[j * D + a] - u[i * D + a]);
+        ly2 += y * y;
+        lx2 += xi * xi;
+      }
+      best = std::max(best, (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2));
+    }
+  }
+  return best;
+}
+
+long long Model::breakBondsAbove(const std::vector<double>& u, double sBreak) {
+  if (!damage_) return 0;
   const int D = particles_.dim;
   long long broken = 0;
   removeBondsIf([&](int i, int j) {
@@ -345,7 +372,7 @@ long long Model::breakBonds(const std::vector<double>& u) {
       lx2 += xi * xi;
     }
     const double s = (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2);
-    const bool brk = s >= damage_->sCr;
+    const bool brk = s >= sBreak;
     // Count each bond once over all ranks: at the end with the lower global id.
     broken += brk && particles_.globalId[i] < particles_.globalId[j];
     return !brk;

@@ -276,12 +276,15 @@ TEST(Model, DamageTangentMatchesFiniteDifferences) {
     ASSERT_GT(band, 0);
     ASSERT_GT(beyond, 0);
 
-    auto model = makeModel(d, material(dim), 0.05);
-    model->enableDamage(ds);
-    const auto [err, asym] = tangentErrors(*model, d, u, 1e-7);
-    EXPECT_LT(err, 1e-6) << "dim " << dim;
-    // Damage makes the tangent unsymmetric (that is why GMRES is required).
-    EXPECT_GT(asym, 1e-6);
+    for (auto law : {DamageSpec::Softening::Paper, DamageSpec::Softening::Continuous}) {
+      ds.softening = law;
+      auto model = makeModel(d, material(dim), 0.05);
+      model->enableDamage(ds);
+      const auto [err, asym] = tangentErrors(*model, d, u, 1e-7);
+      EXPECT_LT(err, 1e-6) << "dim " << dim << (law == DamageSpec::Softening::Paper ? ", Paper" : ", Continuous");
+      // Damage makes the tangent unsymmetric (that is why GMRES is required).
+      EXPECT_GT(asym, 1e-6);
+    }
   }
 }
 
@@ -304,6 +307,46 @@ TEST(Model, BondSofteningFunction) {
     bondSoftening(ds, s, T, dT);
     EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT));
     EXPECT_LT(dT, 0.0);
+  }
+  // The paper's law jumps at both ends of the band: by 1/2 (1 - tanh 3) = 0.0025.
+  const double e = 1e-12;
+  bondSoftening(ds, ds.sMin, T, dT);
+  EXPECT_NEAR(1.0 - T, 0.5 * (1.0 - std::tanh(3.0)), 1e-12);
+  bondSoftening(ds, ds.sCr - e, T, dT);
+  EXPECT_NEAR(T, 0.5 * (1.0 - std::tanh(3.0)), 1e-8);
+}
+
+// The continuous law: exactly 1 at s_min and 0 at s_cr (no jump; |T(s_cr - e)| is of order
+// |dT/ds| e = 6000 * 0.0099 / tanh(3) * 1e-12 ~ 6e-14, bound 1e-10), 1/2 in the middle, and
+// its derivative dT/ds = -1/2 sech^2(n) (dn/ds) / tanh(beta) against a central difference.
+TEST(Model, ContinuousSofteningFunction) {
+  DamageSpec ds{0.0015, 0.002, 3.0, DamageSpec::Softening::Continuous};
+  double T, dT;
+  const double e = 1e-12;
+  bondSoftening(ds, ds.sMin, T, dT);
+  EXPECT_NEAR(T, 1.0, 1e-14);
+  bondSoftening(ds, ds.sMin - e, T, dT);
+  EXPECT_EQ(T, 1.0);
+  bondSoftening(ds, ds.sCr - e, T, dT);
+  EXPECT_NEAR(T, 0.0, 1e-10);
+  bondSoftening(ds, ds.sCr, T, dT);
+  EXPECT_EQ(T, 0.0);
+  bondSoftening(ds, 0.00175, T, dT);
+  EXPECT_NEAR(T, 0.5, 1e-15);
+  for (double s : {0.0016, 0.00175, 0.0019}) {
+    double Tp, Tm, d0;
+    const double h = 1e-9;
+    bondSoftening(ds, s + h, Tp, d0);
+    bondSoftening(ds, s - h, Tm, d0);
+    bondSoftening(ds, s, T, dT);
+    EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT));
+    EXPECT_LT(dT, 0.0);
+    // It lies below the paper's law's rescaling endpoints: T_c = (T_p - T_p(sCr-)) / tanh(beta).
+    DamageSpec dp = ds;
+    dp.softening = DamageSpec::Softening::Paper;
+    double Tpap, dTp;
+    bondSoftening(dp, s, Tpap, dTp);
+    EXPECT_NEAR(T, (Tpap - 0.5 * (1.0 - std::tanh(3.0))) / std::tanh(3.0), 1e-14);
   }
 }
 
@@ -433,7 +476,7 @@ TEST(Model, StressPoints2D3D) {
 TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
   struct Case {
     const char* name;
-    bool corr, stab, springs, ads, sp, dmg, smallStrain;
+    bool corr, stab, springs, ads, sp, dmg, smallStrain, continuous = false;
   };
   const Case cases[] = {
       {"correspondence", true, false, false, false, false, false, false},
@@ -444,6 +487,7 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       {"stress points", false, false, false, false, true, false, false},
       {"stress points + damage", false, false, false, false, true, true, false},
       {"stabilised + damage", true, true, false, false, false, true, false},
+      {"stabilised + continuous damage", true, true, false, false, false, true, false, true},
   };
   for (int dim : {1, 2, 3}) {
     for (const Case& c : cases) {
@@ -462,7 +506,9 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       if (c.stab) model.enableStabilization({0.3, micromodulusC(m, d.horizon, d.thickness)});
       auto u = randomDisplacement(n, D, 0.01 * d.dx, 17);
       for (int i = 0; i < n; ++i) u[i * D] += 0.03 * d.X[i][0];  // stretches spread over the band
-      if (c.dmg) model.enableDamage(DamageSpec{0.02, 0.04, 3.0});
+      if (c.dmg)
+        model.enableDamage(DamageSpec{0.02, 0.04, 3.0,
+                                      c.continuous ? DamageSpec::Softening::Continuous : DamageSpec::Softening::Paper});
       DenseSink s(D, n);
       model.evaluate(u, s, true);
       const auto v = randomDisplacement(n, D, 1.0, 23);

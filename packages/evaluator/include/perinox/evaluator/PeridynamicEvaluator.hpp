@@ -105,6 +105,11 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// After a converged step: breaks every bond with s >= s_cr at x, then detaches (isolates
   /// and freezes) every particle left with a singular shape tensor, repeating until none is.
   BreakReport breakBonds(const Thyra::VectorBase<double>& x);
+  /// For a load step that cannot be converged (a snap-back of softening bonds under displacement
+  /// control): breaks, at the converged state x, the intact bonds whose stretch is within
+  /// tol of the largest one, if that one is in the softening band (s >= s_min; none otherwise),
+  /// then detaches as breakBonds does. maxStretch receives the largest stretch.
+  BreakReport breakMostStretched(const Thyra::VectorBase<double>& x, double tol, double& maxStretch);
   /// Damage index of the owned particles.
   std::vector<double> ownedDamage() const { return model_->damageIndex(); }
   const std::vector<long long>& detachedParticles() const { return detachedAll_; }
@@ -120,6 +125,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   long long freeDof(long long p, int c) const { return freeId_[p * problem_->dim() + c]; }
 
  private:
+  void detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep);
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
   void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
                      const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;

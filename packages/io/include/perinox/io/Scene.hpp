@@ -99,6 +99,9 @@ struct Scene {
   SolverSettings solver;
   OutputSettings output;
   int maxBreakRounds = 50;                        // damage: break/re-equilibrate rounds per step
+  bool stallBreak = false;                        // damage: On Stall = Break Most Stretched
+  double stallBreakTolerance = 1e-6;              // damage: stretch window of that break, relative to s_cr - s_min
+  int maxStallBreaks = 200;                       // damage: stall breaks allowed in a run
   Teuchos::RCP<Teuchos::ParameterList> resolved;  // the scene with every default filled in
 };
 

@@ -112,10 +112,15 @@ struct ControlSpec {
 /// Bond softening of the implicit damage model (seed 000, eqs 45-54):
 /// T_s(s) = 1 below sMin, 1/2 (1 - tanh(beta (sMin + sCr - 2 s) / (sMin - sCr))) in the band,
 /// 0 from sCr on. Bonds with s >= sCr are broken for good after a converged load step.
+/// The paper's law jumps at both ends of the band (T_s(sMin+) = 1/2 (1 + tanh beta) = 0.9975 and
+/// T_s(sCr-) = 1/2 (1 - tanh beta) = 0.0025 for beta = 3). Softening::Continuous rescales the tanh
+/// so that it is exactly 1 at sMin and 0 at sCr: T_s = 1/2 (1 - tanh(n) / tanh(beta)), continuous
+/// (only its slope still jumps at the two ends).
 struct DamageSpec {
   double sMin = 0.0015;
   double sCr = 0.002;
   double beta = 3.0;
+  enum class Softening { Paper, Continuous } softening = Softening::Paper;
 };
 
 /// T_s(s) and dT_s/ds (dT_s/ds uses the corrected derivative of FORMULATION.md).
@@ -126,8 +131,15 @@ inline void bondSoftening(const DamageSpec& d, double s, double& Ts, double& dTs
   } else if (s < d.sCr) {
     const double n = d.beta * (d.sMin + d.sCr - 2.0 * s) / (d.sMin - d.sCr);
     const double th = std::tanh(n);
-    Ts = 0.5 * (1.0 - th);
-    dTs = -0.5 * (1.0 - th * th) * (-2.0 * d.beta / (d.sMin - d.sCr));
+    const double dn = -2.0 * d.beta / (d.sMin - d.sCr);  // dn/ds
+    if (d.softening == DamageSpec::Softening::Continuous) {
+      const double tb = std::tanh(d.beta);
+      Ts = 0.5 * (1.0 - th / tb);
+      dTs = -0.5 * (1.0 - th * th) * dn / tb;
+    } else {
+      Ts = 0.5 * (1.0 - th);
+      dTs = -0.5 * (1.0 - th * th) * dn;
+    }
   } else {
     Ts = 0.0;
     dTs = 0.0;
@@ -171,6 +183,10 @@ class Model {
   /// Returns the number of bonds broken, each counted on the rank owning its lower-id end
   /// (so a sum over ranks counts every bond once).
   long long breakBonds(const std::vector<double>& u);
+  /// The same with another threshold: breaks every intact bond with stretch >= sBreak.
+  long long breakBondsAbove(const std::vector<double>& u, double sBreak);
+  /// The largest stretch of an intact bond of an owned, attached particle at u (-inf if none).
+  double maxIntactStretch(const std::vector<double>& u) const;
   /// Removes every bond to or from the given particles (global ids) and empties their families.
   void isolate(const std::vector<long long>& globalIds);
   /// Owned particles (global ids) whose shape tensor is singular, not yet detached.
