@@ -339,21 +339,26 @@ long long Model::breakBonds(const std::vector<double>& u) {
   return breakBondsAbove(u, damage_->sCr);
 }
 
-double Model::maxIntactStretch(const std::vector<double>& u) const {
+double Model::bondStretch(const std::vector<double>& u, int i, int j) const {
+  // Both ends of a bond evaluate this with the same operands in the same order, so they agree
+  // bit for bit (ranks decide breaking without talking).
   const int D = particles_.dim;
+  double ly2 = 0, lx2 = 0;
+  for (int a = 0; a < D; ++a) {
+    const double xi = particles_.X[j][a] - particles_.X[i][a];
+    const double y = xi + (u[j * D + a] - u[i * D + a]);
+    ly2 += y * y;
+    lx2 += xi * xi;
+  }
+  return (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2);
+}
+
+double Model::maxIntactStretch(const std::vector<double>& u) const {
   double best = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < particles_.numOwned; ++i) {
     if (detached(i)) continue;
     for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) {
-      const int j = particles_.famIndex[q];
-      double ly2 = 0, lx2 = 0;
-      for (int a = 0; a < D; ++a) {
-        const double xi = particles_.X[j][a] - particles_.X[i][a];
-        const double y = xi + (u[j * D + a] - u[i * D + a]);
-        ly2 += y * y;
-        lx2 += xi * xi;
-      }
-      best = std::max(best, (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2));
+      best = std::max(best, bondStretch(u, i, particles_.famIndex[q]));
     }
   }
   return best;
@@ -361,18 +366,9 @@ double Model::maxIntactStretch(const std::vector<double>& u) const {
 
 long long Model::breakBondsAbove(const std::vector<double>& u, double sBreak) {
   if (!damage_) return 0;
-  const int D = particles_.dim;
   long long broken = 0;
   removeBondsIf([&](int i, int j) {
-    double ly2 = 0, lx2 = 0;
-    for (int a = 0; a < D; ++a) {
-      const double xi = particles_.X[j][a] - particles_.X[i][a];
-      const double y = xi + (u[j * D + a] - u[i * D + a]);
-      ly2 += y * y;
-      lx2 += xi * xi;
-    }
-    const double s = (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2);
-    const bool brk = s >= sBreak;
+    const bool brk = bondStretch(u, i, j) >= sBreak;
     // Count each bond once over all ranks: at the end with the lower global id.
     broken += brk && particles_.globalId[i] < particles_.globalId[j];
     return !brk;

@@ -176,13 +176,7 @@ ArcLengthResult ArcLengthSolver::correct(Vec& x, double& lambda, const Vec& tx, 
   } catch (const EvaluationError& e) {
     r.failure = std::string("model evaluation failed: ") + e.what();
   } catch (const std::exception& e) {
-    std::string reason, line;
-    std::stringstream ss(e.what());
-    while (std::getline(ss, line))
-      if (line.find_first_not_of(" \t") != std::string::npos) reason = line;
-    if (reason.find("factorization failed") != std::string::npos)
-      reason += " (the tangent is singular: an unstable or unconstrained mode)";
-    r.failure = "linear solver error: " + reason;
+    r.failure = linearSolverFailure(e);
   }
   if (!r.converged) r.iterations = std::max(r.iterations, static_cast<int>(r.residuals.size()) - 1);
   ev_->setLoadFactor(lambda);

@@ -166,6 +166,18 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
 
 }  // namespace
 
+std::string linearSolverFailure(const std::exception& e) {
+  // Trilinos exceptions carry the source location and the throw test before the reason;
+  // keep the reason (the last non-empty line).
+  std::string reason, line;
+  std::stringstream ss(e.what());
+  while (std::getline(ss, line))
+    if (line.find_first_not_of(" \t") != std::string::npos) reason = line;
+  if (reason.find("factorization failed") != std::string::npos)
+    reason += " (the tangent is singular: an unstable or unconstrained mode)";
+  return "linear solver error: " + reason;
+}
+
 NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options)
     : evaluator_(std::move(evaluator)), options_(options) {}
 
@@ -228,15 +240,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   } catch (const EvaluationError& e) {
     result.failure = std::string("model evaluation failed: ") + e.what();
   } catch (const std::exception& e) {
-    // Trilinos exceptions carry the source location and the throw test before the reason;
-    // keep the reason (the last non-empty line).
-    std::string reason, line;
-    std::stringstream ss(e.what());
-    while (std::getline(ss, line))
-      if (line.find_first_not_of(" \t") != std::string::npos) reason = line;
-    if (reason.find("factorization failed") != std::string::npos)
-      reason += " (the tangent is singular: an unstable or unconstrained mode)";
-    result.failure = "linear solver error: " + reason;
+    result.failure = linearSolverFailure(e);
   } catch (const char* e) {  // NOX throws string literals in places
     result.failure = std::string("nonlinear solver error: ") + e;
   }

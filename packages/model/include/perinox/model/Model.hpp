@@ -223,6 +223,8 @@ class Model {
  struct Impl;  // dimension-specific implementation (Model.cpp)
 
  private:
+  /// Stretch (|Y| - |xi|) / |xi| of the bond from local particle i to local particle j at u.
+  double bondStretch(const std::vector<double>& u, int i, int j) const;
   void checkShapeTensors() const;
   bool shapeTensorInvertible(int ownedLocal) const;
   MaterialSpec materialSpec_;

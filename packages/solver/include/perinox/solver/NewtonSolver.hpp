@@ -5,6 +5,7 @@
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
 #include <Thyra_VectorBase.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,10 @@ struct NewtonResult {
 /// "residual stagnation: ..." when the last `window` normalised residuals all stayed above half of
 /// the best residual before them (Newton near a solution halves it every iteration), else "".
 std::string stagnationDiagnosis(const std::vector<double>& residuals, int window);
+
+/// "linear solver error: <reason>" from an exception a Trilinos solve threw: the last non-empty
+/// line of its message, with a hint when a factorisation found the tangent singular.
+std::string linearSolverFailure(const std::exception& e);
 
 class NewtonSolver {
  public:
