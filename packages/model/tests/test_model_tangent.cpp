@@ -288,6 +288,20 @@ TEST(Model, DamageTangentMatchesFiniteDifferences) {
   }
 }
 
+/// dT_s/ds against a central difference (h = 1e-9, truncation ~1e-12 relative; bound 1e-5) and
+/// negative, at three stretches inside the band of ds = (0.0015, 0.002).
+void expectSofteningDerivativeInBand(const DamageSpec& ds) {
+  for (double s : {0.0016, 0.00175, 0.0019}) {
+    double T, dT, Tp, Tm, d0;
+    const double h = 1e-9;
+    bondSoftening(ds, s + h, Tp, d0);
+    bondSoftening(ds, s - h, Tm, d0);
+    bondSoftening(ds, s, T, dT);
+    EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT)) << "s = " << s;
+    EXPECT_LT(dT, 0.0);
+  }
+}
+
 // The softening function: values at the band's ends and the corrected derivative
 // dT_s/ds = -1/2 sech^2(n) dn/ds against a central difference.
 TEST(Model, BondSofteningFunction) {
@@ -299,15 +313,7 @@ TEST(Model, BondSofteningFunction) {
   EXPECT_EQ(T, 0.0);
   bondSoftening(ds, 0.00175, T, dT);  // middle of the band: n = 0
   EXPECT_NEAR(T, 0.5, 1e-15);
-  for (double s : {0.0016, 0.00175, 0.0019}) {
-    double Tp, Tm, d0;
-    const double h = 1e-9;
-    bondSoftening(ds, s + h, Tp, d0);
-    bondSoftening(ds, s - h, Tm, d0);
-    bondSoftening(ds, s, T, dT);
-    EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT));
-    EXPECT_LT(dT, 0.0);
-  }
+  expectSofteningDerivativeInBand(ds);
   // The paper's law jumps at both ends of the band: by 1/2 (1 - tanh 3) = 0.0025.
   const double e = 1e-12;
   bondSoftening(ds, ds.sMin, T, dT);
@@ -333,14 +339,9 @@ TEST(Model, ContinuousSofteningFunction) {
   EXPECT_EQ(T, 0.0);
   bondSoftening(ds, 0.00175, T, dT);
   EXPECT_NEAR(T, 0.5, 1e-15);
+  expectSofteningDerivativeInBand(ds);
   for (double s : {0.0016, 0.00175, 0.0019}) {
-    double Tp, Tm, d0;
-    const double h = 1e-9;
-    bondSoftening(ds, s + h, Tp, d0);
-    bondSoftening(ds, s - h, Tm, d0);
     bondSoftening(ds, s, T, dT);
-    EXPECT_NEAR(dT, (Tp - Tm) / (2 * h), 1e-5 * std::abs(dT));
-    EXPECT_LT(dT, 0.0);
     // It lies below the paper's law's rescaling endpoints: T_c = (T_p - T_p(sCr-)) / tanh(beta).
     DamageSpec dp = ds;
     dp.softening = DamageSpec::Softening::Paper;
