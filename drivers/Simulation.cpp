@@ -170,6 +170,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     }
     ++step;
     const double tStep = now();
+    const LinearSolveCounts before = als.totalLinear();
     StepRecord rec;
     rec.step = step;
     ArcLengthResult r;
@@ -197,6 +198,10 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     rec.loadFactor = l;
     rec.arcLength = ds;
     rec.newtonIterations = r.iterations;
+    rec.linearSolves = als.totalLinear().solves - before.solves;
+    rec.krylovIterations = als.totalLinear().krylovIterations - before.krylovIterations;
+    // Every corrector iteration solves two systems (J a = -f, J b = df/dlambda).
+    rec.newtonIterationsAll = rec.linearSolves / 2;
     rec.residuals = r.residuals;
     rec.reactionNormalised = r.reactionNormalised;
     rec.atRoundoffFloor = r.atRoundoffFloor;
@@ -396,9 +401,17 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
     ++step;
     const double tStep = now();
+    const long long newtonBefore = newton.totalNewtonIterations();
+    const LinearSolveCounts linearBefore = newton.totalLinear();
     StepRecord rec;
     rec.step = step;
     NewtonResult nr;
+    // The work of the step so far, every attempt included.
+    auto account = [&](StepRecord& r) {
+      r.newtonIterationsAll = newton.totalNewtonIterations() - newtonBefore;
+      r.linearSolves = newton.totalLinear().solves - linearBefore.solves;
+      r.krylovIterations = newton.totalLinear().krylovIterations - linearBefore.krylovIterations;
+    };
     int cut = 0;
     const double stepIncrement = increment;
     for (;;) {
@@ -488,6 +501,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     rec.floor = nr.floorNormalised;
     rec.elapsed = now() - tStep;
     if (!nr.converged) rec.residuals = nr.residuals;
+    account(rec);
+    if (scene.solver.method == "ADR") rec.newtonIterationsAll = nr.iterations;
     res.steps.push_back(rec);
     if (!nr.converged) {
       ok = false;
@@ -523,6 +538,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         }
       }
       if (!nr.converged) {
+        account(rec);
         res.steps.back() = rec;
         ok = false;
         res.failure = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
@@ -530,6 +546,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       }
       rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
       rec.elapsed = now() - tStep;
+      account(rec);
       res.steps.back() = rec;
       if (rank == 0 && !options.quiet && (rec.brokenBonds > 0 || !rec.detached.empty()))
         std::cout << "    damage: " << rec.brokenBonds << " bond(s) broken, " << rec.breakRounds
@@ -569,6 +586,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << (nr.residuals.empty() ? 0.0 : (scene.solver.method == "ADR" ? nr.residuals.front() : nr.residuals.back()))
                 << (scene.solver.method == "ADR" ? ", " : "")
                 << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
+                << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
                 << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << "\n";
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
@@ -657,6 +675,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       steps.push_back({{"step", s.step},
                        {"load_factor", s.loadFactor},
                        {"newton_iterations", s.newtonIterations},
+                       {"newton_iterations_all_attempts", s.newtonIterationsAll},
+                       {"linear_solves", s.linearSolves},
+                       {"krylov_iterations", s.krylovIterations},
                        {"residuals", s.residuals},
                        {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
                        {"cutbacks", s.cutbacks},
@@ -676,6 +697,19 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
     }
     j["steps"] = steps;
+    {
+      long long newtonAll = 0, solves = 0, krylov = 0;
+      for (const auto& s : res.steps) {
+        newtonAll += s.newtonIterationsAll;
+        solves += s.linearSolves;
+        krylov += s.krylovIterations;
+      }
+      // The run's whole work: Newton iterations of every attempt (ADR: its iterations), linear
+      // solves, and Krylov iterations (0 with a direct solver).
+      j["newton_iterations_total"] = newtonAll;
+      j["linear_solves_total"] = solves;
+      j["krylov_iterations_total"] = krylov;
+    }
     if (scene.problem->damage) {
       long long total = 0;
       for (const auto& s : res.steps) total += s.brokenBonds;

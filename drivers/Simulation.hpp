@@ -14,7 +14,11 @@ namespace perinox {
 struct StepRecord {
   int step = 0;
   double loadFactor = 0;
-  int newtonIterations = 0;
+  int newtonIterations = 0;        // iterations of the solve that converged the step (and its
+                                   // re-equilibrations)
+  long long newtonIterationsAll = 0;  // every attempt of the step, cut-backs included
+  long long linearSolves = 0;      // linear systems solved in the step, all attempts
+  long long krylovIterations = 0;  // Krylov iterations spent on them (0 with a direct solver)
   std::vector<double> residuals;
   bool reactionNormalised = false;
   bool atRoundoffFloor = false;    // converged on the round-off floor rather than the tolerance

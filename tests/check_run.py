@@ -73,6 +73,9 @@ def main():
                     help="the last (failing) step's load factor lies in [LO, HI]")
     ap.add_argument("--hydrostatic-curve", nargs=5, metavar=("PROBE", "X0", "TRACTION", "LAMBDA_PLUS_MU", "RTOL"),
                     help="probe PROBE at reference x = X0 follows u = (x - 1) X0 with 2(lambda+mu) ln(x)/x = load factor * TRACTION")
+    ap.add_argument("--work-counts", choices=["direct", "krylov"],
+                    help="check the recorded solver work: totals equal the sums over steps, a linear solve "
+                         "for every Newton iteration, and Krylov iterations (>= 1 a solve) or none (direct)")
     ap.add_argument("--floor", type=float, default=FLOOR,
                     help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
@@ -136,6 +139,24 @@ def main():
             print(f"hydrostatic curve: largest relative deviation {worst:.4f} over {len(s['probes'][name])} steps")
             if worst > rtol:
                 fail(f"deviation {worst} from the analytic curve exceeds {rtol}")
+    if a.work_counts:
+        with open(os.path.join(a.out, "summary.json")) as f:
+            s = json.load(f)
+        st = s["steps"]
+        for key, total in (("newton_iterations_all_attempts", "newton_iterations_total"),
+                           ("linear_solves", "linear_solves_total"), ("krylov_iterations", "krylov_iterations_total")):
+            if sum(x[key] for x in st) != s[total]:
+                fail(f"{total} = {s[total]} is not the sum of the steps' {key}")
+        newton = sum(x["newton_iterations"] for x in st)
+        if not newton <= s["newton_iterations_total"] <= s["linear_solves_total"]:
+            fail(f"expected Newton iterations of the converged solves ({newton}) <= all Newton iterations "
+                 f"({s['newton_iterations_total']}) <= linear solves ({s['linear_solves_total']})")
+        if a.work_counts == "direct" and s["krylov_iterations_total"] != 0:
+            fail(f"a direct solver recorded {s['krylov_iterations_total']} Krylov iterations")
+        if a.work_counts == "krylov" and not s["krylov_iterations_total"] >= s["linear_solves_total"] > 0:
+            fail(f"{s['krylov_iterations_total']} Krylov iterations for {s['linear_solves_total']} solves")
+        print(f"work: {newton} Newton iterations in converged solves, {s['newton_iterations_total']} in all, "
+              f"{s['linear_solves_total']} linear solves, {s['krylov_iterations_total']} Krylov iterations")
     if a.no_output:
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):

@@ -10,7 +10,9 @@ deflection (-3.127274 mm, validation/reference/clamped_beam_fem.csv), over parti
 solver, Newton with GMRES + ILU, Newton with GMRES + MueLu, matrix-free Newton-Krylov (analytic
 J v with MueLu on the direct-neighbour Jacobian, or with ILU of the assembled one), Jacobian-free
 Newton-Krylov, and explicit ADR (small cases only: it needs tens of thousands of iterations).
-Peak memory (the driver's resident high-water mark) is recorded beside the time. Each run is the perinox driver; wall time is
+Peak memory (the driver's resident high-water mark), Newton iterations (every attempt, cut-backs
+included; for ADR its iterations), linear solves and Krylov iterations (0 for the direct solver)
+are recorded beside the time. Each run is the perinox driver; wall time is
 the driver's own (summary.json, set-up included), measured one run at a time.
 Writes OUT/accuracy_cost.csv and OUT/accuracy_cost.png (log-log error against time; the
 lower-left frontier is what a user chooses from).
@@ -79,12 +81,18 @@ def main():
                             [f"Discretization/Particles={grid}", f"Discretization/Horizon Factor={h}", f"Model/G={G}"] + extra)
                     v = s["probes"]["midspan"][-1]["displacement"][1] if s["converged"] else float("nan")
                     err = abs(v / REF - 1)
-                    iters = sum(st["newton_iterations"] for st in s["steps"])
+                    # Newton iterations of every attempt (cut-backs included; ADR: its iterations),
+                    # the linear systems solved and the Krylov iterations spent (0: direct solver).
+                    iters = s["newton_iterations_total"]
+                    krylov = s["krylov_iterations_total"]
+                    solves = s["linear_solves_total"]
                     rows.append(dict(particles=grid, horizon=h, G=G, solver=name, converged=s["converged"],
                                      deflection=v, error=err, wall_time_s=s["wall_time_s"], iterations=iters,
+                                     linear_solves=solves, krylov_iterations=krylov,
                                      dofs=s["dofs"], peak_rss_mib=s.get("peak_rss_mib_max_rank", float("nan")),
                                      matrix_mib=s.get("matrix_bytes", 0) / 2**20))
-                    print(f"{grid:>9} delta {h} G {G:>4} {name:>20}: error {err:.3e}  time {s['wall_time_s']:8.2f} s  iterations {iters}"
+                    print(f"{grid:>9} delta {h} G {G:>4} {name:>20}: error {err:.3e}  time {s['wall_time_s']:8.2f} s  "
+                          f"iterations {iters}  krylov {krylov}"
                           f"  peak {s.get('peak_rss_mib_max_rank', float('nan')):.0f} MiB", flush=True)
     if a.merge:
         ran = {r["solver"] for r in rows}

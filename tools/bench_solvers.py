@@ -58,7 +58,8 @@ def run(perinox, scene, out, sets, timeout):
     return {
         "converged": j["converged"],
         "wall": j["wall_time_s"],
-        "newton": sum(s["newton_iterations"] for s in j["steps"]),
+        "newton": j.get("newton_iterations_total", sum(s["newton_iterations"] for s in j["steps"])),
+        "krylov": j.get("krylov_iterations_total", 0),
         "steps": len(j["steps"]),
         "matrix_mib": j.get("matrix_bytes", 0) / 2**20,
         "rss_mib": j.get("peak_rss_mib_max_rank", float("nan")),
@@ -80,13 +81,13 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = []
-    keys = ["particles", "preset", "status", "wall_s", "newton_iterations", "matrix_mib", "peak_rss_mib",
+    keys = ["particles", "preset", "status", "wall_s", "newton_iterations", "krylov_iterations", "matrix_mib", "peak_rss_mib",
             "speedup_vs_first", "memory_ratio_first_over_this"]
     csv_file = open(os.path.join(a.out, "bench_solvers.csv"), "w", newline="")
     writer = csv.DictWriter(csv_file, fieldnames=keys)
     writer.writeheader()
     print(f"# {os.path.relpath(a.scene, ROOT)}, delta = {a.horizon} dx, one load step; ratios to {a.presets[0]}")
-    print(f"{'particles':>10} {'preset':>18} {'conv':>5} {'wall s':>9} {'Newton':>6} {'matrix MiB':>10} {'peak MiB':>9}"
+    print(f"{'particles':>10} {'preset':>18} {'conv':>5} {'wall s':>9} {'Newton':>6} {'Krylov':>7} {'matrix MiB':>10} {'peak MiB':>9}"
           f" {'time ratio':>10} {'mem ratio':>9}")
     for size in a.sizes:
         nx, ny = size.split("x")
@@ -100,7 +101,7 @@ def main():
             n = int(nx) * int(ny)
             if r.get("timeout") or r.get("failed"):
                 status = "timeout" if r.get("timeout") else "failed"
-                print(f"{n:>10} {preset:>18} {status:>5} >{r['wall']:>8.1f} {'':>6} {'':>10} >{r.get('rss_mib', 0):>8.0f}"
+                print(f"{n:>10} {preset:>18} {status:>5} >{r['wall']:>8.1f} {'':>6} {'':>7} {'':>10} >{r.get('rss_mib', 0):>8.0f}"
                       "   (lower bounds: stopped at the time limit)", flush=True)
                 rows.append({"particles": n, "preset": preset, "status": status, "wall_s": r["wall"],
                              "peak_rss_mib": r.get("rss_mib", float("nan"))})
@@ -114,10 +115,10 @@ def main():
             # Against a reference stopped at the time limit the ratios are lower bounds (">").
             tr = base["wall"] / r["wall"] if r["wall"] > 0 else float("nan")
             mr = base["rss_mib"] / r["rss_mib"] if r["rss_mib"] > 0 else float("nan")
-            print(f"{n:>10} {preset:>18} {str(r['converged']):>5} {r['wall']:>9.2f} {r['newton']:>6} {r['matrix_mib']:>10.1f}"
+            print(f"{n:>10} {preset:>18} {str(r['converged']):>5} {r['wall']:>9.2f} {r['newton']:>6} {r['krylov']:>7} {r['matrix_mib']:>10.1f}"
                   f" {r['rss_mib']:>9.0f} {'>' if base.get('bound') else ' '}{tr:>9.2f} {mr:>9.2f}", flush=True)
             rows.append({"particles": n, "preset": preset, "status": "converged" if r["converged"] else "not converged",
-                         "wall_s": r["wall"], "newton_iterations": r["newton"], "matrix_mib": r["matrix_mib"],
+                         "wall_s": r["wall"], "newton_iterations": r["newton"], "krylov_iterations": r["krylov"], "matrix_mib": r["matrix_mib"],
                          "peak_rss_mib": r["rss_mib"], "speedup_vs_first": tr, "memory_ratio_first_over_this": mr})
             writer.writerow(rows[-1])
             csv_file.flush()

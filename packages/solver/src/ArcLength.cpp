@@ -5,6 +5,7 @@
 #include <Thyra_LinearOpWithSolveBase.hpp>
 #include <Thyra_LinearOpWithSolveFactoryHelpers.hpp>
 #include <Thyra_VectorStdOps.hpp>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -33,12 +34,15 @@ void evaluate(const PeridynamicEvaluator& ev, const Vec& x, Vec* f, Thyra::Linea
 
 /// Solves A y = b (y starts at zero); returns false when the linear solver reports that it did
 /// not converge (Belos: iteration limit or breakdown).
-bool solve(const Thyra::LinearOpWithSolveBase<double>& A, const Vec& b, Vec& y, double tol, std::string& why) {
+bool solve(const Thyra::LinearOpWithSolveBase<double>& A, const Vec& b, Vec& y, double tol, std::string& why,
+           LinearSolveCounts& counts) {
   Thyra::assign(Teuchos::ptrFromRef(y), 0.0);
   Thyra::SolveCriteria<double> crit;
   crit.solveMeasureType = Thyra::SolveMeasureType(Thyra::SOLVE_MEASURE_NORM_RESIDUAL, Thyra::SOLVE_MEASURE_NORM_RHS);
   crit.requestedTol = tol;
   const auto st = A.solve(Thyra::NOTRANS, b, Teuchos::ptrFromRef(y), Teuchos::constPtr(crit));
+  ++counts.solves;
+  if (!st.extraParameters.is_null()) counts.krylovIterations += std::max(0, st.extraParameters->get("Iteration Count", 0));
   // Belos can report "unconverged" with an achieved residual far below the request (its
   // loss-of-accuracy check on 2 ranks, measured 1e-20 against 1e-12): the achieved value decides.
   const bool known = st.achievedTol != Thyra::SolveStatus<double>::unknownTolerance();
@@ -91,7 +95,7 @@ std::string ArcLengthSolver::tangent(const Vec& x, double lambda, Vec& z) const 
     auto rhs = fl->clone_v();
     Thyra::scale(-1.0, rhs.ptr());
     std::string why;
-    if (!solve(*lows, *rhs, z, opt_.linearTolerance, why)) return "tangent solve: " + why;
+    if (!solve(*lows, *rhs, z, opt_.linearTolerance, why, counts_)) return "tangent solve: " + why;
   } catch (const EvaluationError& e) {
     return std::string("model evaluation failed: ") + e.what();
   } catch (const std::exception& e) {
@@ -150,8 +154,8 @@ ArcLengthResult ArcLengthSolver::correct(Vec& x, double& lambda, const Vec& tx, 
       auto lows = Thyra::linearOpWithSolve(*ev_->get_W_factory(), W.getConst());
       Thyra::scale(-1.0, f.ptr());
       std::string why;
-      bool okA = solve(*lows, *f, *a, opt_.linearTolerance, why);
-      bool okB = okA && solve(*lows, *fl, *b, opt_.linearTolerance, why);
+      bool okA = solve(*lows, *f, *a, opt_.linearTolerance, why, counts_);
+      bool okB = okA && solve(*lows, *fl, *b, opt_.linearTolerance, why, counts_);
       if (!okA || !okB) {
         ++r.linearFailures;
         r.failure = why;

@@ -10,8 +10,10 @@
 #include <NOX_Thyra_Group.H>
 #include <NOX_Thyra_Vector.H>
 #include <Thyra_VectorStdOps.hpp>
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
@@ -47,17 +49,21 @@ namespace {
 class RecordingGroup final : public NOX::Thyra::Group {
  public:
   using NOX::Thyra::Group::Group;
+  /// Copies (the trust-region solvers compute directions on them) share the counts.
   RecordingGroup(const RecordingGroup& source, NOX::CopyType type)
-      : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_) {}
+      : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_), stats_(source.stats_) {}
   NOX::Abstract::Group::ReturnType computeNewton(Teuchos::ParameterList& p) override {
+    last_linear_solve_num_iters_ = 0;  // direct solvers leave it untouched
     const auto st = NOX::Thyra::Group::computeNewton(p);
+    ++stats_->counts.solves;
+    stats_->counts.krylovIterations += std::max(0, last_linear_solve_num_iters_);
     // A solve counts as failed when its status is not Ok and its achieved relative residual is
     // above the request (Belos may flag "unconverged" after reaching it; see ArcLength.cpp).
     const bool bad = st != NOX::Abstract::Group::Ok || last_linear_solve_status_ != NOX::Abstract::Group::Ok;
     if (bad && !(last_linear_solve_achieved_tol_ >= 0 && last_linear_solve_achieved_tol_ <= tolerance_)) {
-      ++failures_;
-      lastTol_ = last_linear_solve_achieved_tol_;
-      lastIters_ = last_linear_solve_num_iters_;
+      ++stats_->failures;
+      stats_->lastTol = last_linear_solve_achieved_tol_;
+      stats_->lastIters = last_linear_solve_num_iters_;
     }
     return st;
   }
@@ -90,15 +96,20 @@ class RecordingGroup final : public NOX::Thyra::Group {
     return Teuchos::rcp(new RecordingGroup(*this, type));
   }
   void setTolerance(double t) { tolerance_ = t; }
-  int failures() const { return failures_; }
-  double lastAchieved() const { return lastTol_; }
-  int lastIterations() const { return lastIters_; }
+  int failures() const { return stats_->failures; }
+  double lastAchieved() const { return stats_->lastTol; }
+  int lastIterations() const { return stats_->lastIters; }
+  const LinearSolveCounts& counts() const { return stats_->counts; }
 
  private:
-  int failures_ = 0;
+  struct Stats {
+    int failures = 0;
+    double lastTol = 0;
+    int lastIters = 0;
+    LinearSolveCounts counts;
+  };
   double tolerance_ = 0;
-  double lastTol_ = 0;
-  int lastIters_ = 0;
+  std::shared_ptr<Stats> stats_ = std::make_shared<Stats>();
 };
 
 /// |R| / scale <= tol, with scale = |f_ext| or, when f_ext = 0, the reaction norm at the
@@ -252,6 +263,13 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   result.converged = result.failure.empty() && status == NOX::StatusTest::Converged &&
                      residualTest->getStatus() == NOX::StatusTest::Converged;
   result.linearFailures = group.is_null() ? 0 : group->failures();
+  if (!group.is_null()) result.linear = group->counts();
+  // When NOX threw, getNumIterations was never read: the residual history (one entry per
+  // iterate) counts the iterations it ran.
+  totalNewton_ += result.iterations > 0 ? result.iterations
+                                        : std::max<long long>(0, static_cast<long long>(result.residuals.size()) - 1);
+  totalLinear_.solves += result.linear.solves;
+  totalLinear_.krylovIterations += result.linear.krylovIterations;
   if (!result.converged && result.failure.empty()) {
     // The most specific cause first: a linear solver that did not solve the Newton systems
     // makes every later symptom (stagnation, iteration limit) a consequence.

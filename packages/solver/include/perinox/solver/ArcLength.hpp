@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "perinox/solver/NewtonSolver.hpp"
+
 namespace perinox {
 
 class PeridynamicEvaluator;
@@ -58,7 +60,11 @@ class ArcLengthSolver {
   ArcLengthResult correct(Thyra::VectorBase<double>& x, double& lambda, const Thyra::VectorBase<double>& tx,
                           double tl, double w, const Thyra::VectorBase<double>& xPred, double lPred) const;
 
+  /// Linear solves (tangent and bordering) and their Krylov iterations over every call so far.
+  const LinearSolveCounts& totalLinear() const { return counts_; }
+
  private:
+  mutable LinearSolveCounts counts_;
   Teuchos::RCP<PeridynamicEvaluator> ev_;
   ArcLengthOptions opt_;
   bool deadLoad_ = true;

@@ -13,6 +13,13 @@ namespace perinox {
 
 class PeridynamicEvaluator;
 
+/// Work done by the linear solver: Newton (or corrector) systems solved, and the Krylov
+/// iterations spent on them (0 for direct solvers, which report none).
+struct LinearSolveCounts {
+  long long solves = 0;
+  long long krylovIterations = 0;
+};
+
 struct NewtonOptions {
   double tolerance = 1e-10;        // on the normalised residual
   int maxIterations = 25;
@@ -34,6 +41,7 @@ struct NewtonResult {
   bool atRoundoffFloor = false;    // converged on the round-off floor, not on the tolerance
   double floorNormalised = 0.0;    // the floor, normalised like the residuals
   int linearFailures = 0;          // Newton solves whose linear solver reported no convergence
+  LinearSolveCounts linear;        // linear solves and Krylov iterations of this call
   std::string failure;             // why it failed (empty when converged)
 };
 
@@ -51,10 +59,16 @@ class NewtonSolver {
   /// Solves f(x) = 0 at the evaluator's current load factor, starting from and updating x.
   /// On failure x keeps the last iterate; the caller restores a converged state.
   NewtonResult solve(Thyra::VectorBase<double>& x);
+  /// Totals over every call of solve, failed ones included (the cost of cut-backs and retries):
+  /// Newton iterations and linear work.
+  long long totalNewtonIterations() const { return totalNewton_; }
+  const LinearSolveCounts& totalLinear() const { return totalLinear_; }
 
  private:
   Teuchos::RCP<PeridynamicEvaluator> evaluator_;
   NewtonOptions options_;
+  long long totalNewton_ = 0;
+  LinearSolveCounts totalLinear_;
 };
 
 }  // namespace perinox
