@@ -8,8 +8,8 @@ import os
 import sys
 
 root = sys.argv[1] if len(sys.argv) > 1 else "build/test-output"
-print("| run | outcome | load steps | cut-backs | Newton iterations | wall time |")
-print("|---|---|---|---|---|---|")
+print("| run | outcome | load steps | cut-backs | Newton iterations | all attempts | Krylov iterations | wall time |")
+print("|---|---|---|---|---|---|---|---|")
 for name in sorted(os.listdir(root)):
     if not name.startswith("hard_"):
         continue
@@ -21,4 +21,5 @@ for name in sorted(os.listdir(root)):
     outcome = "converged" if s["converged"] else "stopped: " + s.get("failure", "")[:90]
     steps = s["steps"]
     print(f"| {name[5:]} | {outcome} | {len(steps)} | {sum(st['cutbacks'] for st in steps)} | "
-          f"{sum(st['newton_iterations'] for st in steps)} | {s['wall_time_s']:.1f} s |")
+          f"{sum(st['newton_iterations'] for st in steps)} | {s.get('newton_iterations_total', '')} | "
+          f"{s.get('krylov_iterations_total', '')} | {s['wall_time_s']:.1f} s |")

@@ -5,10 +5,12 @@
 #include <Thyra_DefaultSpmdVectorSpace.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
+#include <Eigen/Geometry>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <cmath>
 #include <sstream>
 
@@ -452,6 +454,8 @@ std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::Vector
   const LocalParticles& lp = model_->particles();
   auto xt = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x));
   auto xd = xt->getData();
+  std::optional<Eigen::Matrix3d> rotation;
+  if (P.rotates()) rotation = rotationMatrix();
   TVector uOwned(ownedAll_);
   {
     auto ud = uOwned.getDataNonConst();
@@ -467,8 +471,16 @@ std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::Vector
             throw EvaluationError(s.str(), g);
           }
           ud[l * D + c] = v;
-        } else {
+        } else if (!rotation) {
           ud[l * D + c] = lambda_ * P.prescribed[g * D + c];
+        } else {
+          // Superposed rotation: every component of a prescribed particle is prescribed (the
+          // scene checks), so the particle goes to R (X + lambda u_bar - c) + c.
+          Vec3 ub = Vec3::Zero();
+          for (int a = 0; a < D; ++a) ub[a] = P.prescribed[g * D + a];
+          const Vec3 X = P.disc.X[g];
+          const Vec3 y = (*rotation) * (X + lambda_ * ub - P.rotation.center) + P.rotation.center;
+          ud[l * D + c] = y[c] - X[c];
         }
       }
   }
@@ -622,12 +634,26 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
     const int D = problem_->dim();
     LO k = 0;
     const LocalParticles& lp = model_->particles();
-    for (int l = 0; l < lp.numOwned; ++l)
-      for (int c = 0; c < D; ++c)
-        if (overlapFreeLid_[l * D + c] >= 0) {
-          fd[k] = rd[l * D + c] - lambda_ * fe[k];
-          ++k;
-        }
+    if (!problem_->rotates()) {
+      for (int l = 0; l < lp.numOwned; ++l)
+        for (int c = 0; c < D; ++c)
+          if (overlapFreeLid_[l * D + c] >= 0) {
+            fd[k] = rd[l * D + c] - lambda_ * fe[k];
+            ++k;
+          }
+    } else {
+      // Dead loads turn with the body: lambda R f_bar (a free particle has all components free).
+      const Eigen::Matrix3d R = rotationMatrix();
+      const Discretization& d = problem_->disc;
+      for (int l = 0; l < lp.numOwned; ++l) {
+        if (overlapFreeLid_[l * D] < 0) continue;
+        const long long g = lp.globalId[l];
+        Vec3 fb = Vec3::Zero();
+        for (int a = 0; a < D; ++a) fb[a] = d.volume[g] * problem_->bodyForce[g * D + a];
+        const Vec3 fr = R * fb;
+        for (int c = 0; c < D; ++c, ++k) fd[k] = rd[l * D + c] - lambda_ * fr[c];
+      }
+    }
     if (!frozen_.empty()) {
       auto xd = TOE::getConstTpetraVector(x)->getData();
       for (const auto& [lid, value] : frozen_) fd[lid] = frozenStiffness_ * (xd[lid] - value);
@@ -685,6 +711,12 @@ void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, Br
     }
   }
   std::sort(detachedAll_.begin(), detachedAll_.end());
+}
+
+Eigen::Matrix3d PeridynamicEvaluator::rotationMatrix() const {
+  const RotationSpec& r = problem_->rotation;
+  if (r.angle == 0.0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(lambda_ * r.angle, r.axis).toRotationMatrix();
 }
 
 double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextOwnedFree_->norm2(); }

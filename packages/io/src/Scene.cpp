@@ -147,6 +147,12 @@ Teuchos::RCP<ParameterList> buildSchema() {
   s->sublist("Regions", false, "named particle sets");
   s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
   s->sublist("Loads", false, "named loads");
+  auto& rot = s->sublist("Superposed Rotation", false,
+                         "a rigid rotation superposed on the loading: at load factor lambda the body turns by lambda * Angle; "
+                         "prescribed particles follow the arc, dead loads turn with the body (objectivity tests)");
+  rot.set("Angle", 0.0, "degrees at load factor 1 (0: no rotation)");
+  rot.set("Center", arr<double>({0, 0, 0}), "a point on the axis");
+  rot.set("Axis", arr<double>({0, 0, 1}), "3D: the axis (normalised); 2D: must be z");
   s->sublist("Probes", false, "named probes written per load step");
   auto& r = s->sublist("Reference", false, "analytic reference for errors");
   r.set("Type", "None", "None, Hydrostatic Hencky, Uniform Stretch, Affine or Seed001 Bar (eq. 19 with the Material's field parameters)");
@@ -783,6 +789,38 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     }
   }
 
+  // --- superposed rotation ---
+  {
+    const auto& rl = pl.sublist("Superposed Rotation");
+    const double deg = rl.get<double>("Angle");
+    if (!std::isfinite(deg)) fail(file, "'Superposed Rotation/Angle' must be finite");
+    if (deg != 0.0) {
+      if (dim == 1) fail(file, "'Superposed Rotation' needs a 2D or 3D scene");
+      const auto& ca = rl.get<Array<double>>("Center");
+      const auto& aa = rl.get<Array<double>>("Axis");
+      if (static_cast<int>(ca.size()) < dim) fail(file, "'Superposed Rotation/Center' needs " + std::to_string(dim) + " entries");
+      Vec3 axis = vec3(aa);
+      if (dim == 2 && (axis[0] != 0 || axis[1] != 0 || !(axis[2] > 0)))
+        fail(file, "'Superposed Rotation/Axis' must be z ({0, 0, 1}) in 2D");
+      if (!(axis.norm() > 0)) fail(file, "'Superposed Rotation/Axis' must not be zero");
+      problem->rotation.angle = deg * M_PI / 180.0;
+      problem->rotation.axis = axis.normalized();
+      problem->rotation.center = vec3(ca);
+      if (dim == 2) problem->rotation.center[2] = 0;
+      // A partly constrained particle (a roller) would need its constraint direction turned with
+      // the body: not supported, so say which particle.
+      const std::uint8_t all = static_cast<std::uint8_t>((1u << dim) - 1);
+      for (int p = 0; p < n; ++p)
+        if (problem->fixedMask[p] != 0 && problem->fixedMask[p] != all) {
+          std::ostringstream m;
+          m << "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " << p
+            << " at (" << d.X[p][0] << ", " << d.X[p][1] << (dim > 2 ? ", " + std::to_string(d.X[p][2]) : std::string())
+            << ") has only some (a roller's direction would have to turn with the body)";
+          fail(file, m.str());
+        }
+    }
+  }
+
   // --- probes ---
   const auto& pr = pl.sublist("Probes");
   for (auto it = pr.begin(); it != pr.end(); ++it) {
@@ -892,6 +930,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     if (s.continuation == "Arc Length") {
       if (s.method != "Newton") fail(file, "'Solver/Continuation' = Arc Length needs 'Solver/Method' = Newton");
       if (problem->damage) fail(file, "'Solver/Continuation' = Arc Length does not support damage (bonds break between load steps); use Load Stepping");
+      if (problem->rotates()) fail(file, "'Solver/Continuation' = Arc Length does not support a 'Superposed Rotation' (the load is not linear in the load factor); use Load Stepping");
     }
   }
   s.floorFactor = so.get<double>("Round-off Floor Factor");

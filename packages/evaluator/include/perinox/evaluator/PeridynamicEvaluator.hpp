@@ -77,6 +77,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   // --- diagnostics and output ---
   /// |lambda f_ext|_2 over free DOFs (global).
   double externalForceNorm() const;
+  /// The superposed rigid rotation at the current load factor (identity without one).
+  Eigen::Matrix3d rotationMatrix() const;
   /// Round-off scale of the residual: machine epsilon times the norm, over free DOFs, of the
   /// internal force a unit strain would produce (E times Model::unitStressForceScale). Rounding in
   /// F (formed as I + H) is amplified by E, so |R| cannot be resolved much below this.

@@ -12,6 +12,17 @@
 
 namespace perinox {
 
+/// A rigid rotation superposed on the loading: at load factor lambda the body is turned by
+/// lambda * angle about the axis through the centre. Prescribed particles go to
+/// R (X + lambda u_bar - c) + c and dead loads turn with the body (lambda R f_bar), so a scene's
+/// solution with the rotation is R times the one without (objectivity through the solver).
+/// The prescribed motion is nonlinear in lambda: it follows the arc, not the chord.
+struct RotationSpec {
+  double angle = 0.0;                   // radians at load factor 1; 0 = off
+  Vec3 axis = Vec3(0, 0, 1);            // unit vector (2D: z)
+  Vec3 center = Vec3::Zero();
+};
+
 struct ProblemSpec {
   Discretization disc;
   MaterialSpec material;
@@ -29,9 +40,11 @@ struct ProblemSpec {
   std::vector<std::uint8_t> fixedMask;  // per particle: bit c set when component c is prescribed
   std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1
   std::vector<double> bodyForce;        // per particle * dim: body force density at lambda = 1
+  RotationSpec rotation;                // superposed rigid rotation (angle 0: none, costs nothing)
 
   int dim() const { return disc.dim; }
   bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }
+  bool rotates() const { return rotation.angle != 0.0; }
 };
 
 }  // namespace perinox
