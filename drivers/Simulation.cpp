@@ -157,8 +157,9 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
   std::vector<double> lambdas{lambda};
   int step = 0;
   for (;;) {
-    if (lambda >= A.targetLoadFactor) return true;
-    if (A.targetDeflection > 0 && std::abs(defl.back()) >= A.targetDeflection) return true;
+    // At the target (a step lands on it to 1e-9, relative) or past it.
+    if (lambda >= A.targetLoadFactor * (1 - 1e-9)) return true;
+    if (A.targetDeflection > 0 && std::abs(defl.back()) >= A.targetDeflection * (1 - 1e-9)) return true;
     if (step >= A.maxSteps) {
       std::ostringstream s;
       s << "reached 'Solver/Arc Length/Max Steps' = " << A.maxSteps << " at load factor " << lambda
@@ -193,6 +194,55 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
       ds *= 0.5;
       if (rank == 0 && !quiet)
         std::cout << "  step " << step << ": " << r.failure << "; cutting the arc length to " << ds << "\n";
+    }
+    // Land on the target rather than pass it: when a converged step crosses the target load
+    // factor (or deflection), shorten its arc by secant iteration on the arc length and redo it
+    // from the same start, until its end is within 1e-9 (relative) of the target. If a shortened
+    // step fails to converge, the crossing step is kept.
+    if (r.converged) {
+      const double dTarget = A.targetDeflection;
+      bool byLoad = false;  // the load factor crosses its target (else the deflection)
+      auto crossing = [&](double lNew, double& g0, double& g1, double& target) {
+        if (lambda < A.targetLoadFactor && lNew > A.targetLoadFactor) {
+          g0 = lambda, g1 = lNew, target = A.targetLoadFactor, byLoad = true;
+          return true;
+        }
+        if (dTarget > 0 && std::abs(defl.back()) < dTarget) {
+          const double dn = std::abs(deflection(*x));
+          if (dn > dTarget) {
+            g0 = std::abs(defl.back()), g1 = dn, target = dTarget;
+            return true;
+          }
+        }
+        return false;
+      };
+      double g0 = 0, g1 = 0, target = 0;
+      if (crossing(l, g0, g1, target)) {
+        auto xCross = x->clone_v();
+        const double lCross = l, dsCross = ds;
+        const ArcLengthResult rCross = r;
+        double sA = 0, gA = g0, sB = ds, gB = g1;
+        bool landed = false;
+        for (int k = 0; k < 10 && !landed; ++k) {
+          const double sNew = sB + (target - gB) * (sB - sA) / (gB - gA);
+          if (!(sNew > 0) || !(sNew < dsCross)) break;
+          ds = sNew;
+          Thyra::V_StVpStV(x.ptr(), 1.0, xConv, ds, *tx);
+          l = lambda + ds * tl;
+          Thyra::copy(*x, xPred.ptr());
+          r = als.correct(*x, l, *tx, tl, w, *xPred, l);
+          if (!r.converged) break;
+          const double gNew = byLoad ? l : std::abs(deflection(*x));
+          sA = sB, gA = gB, sB = ds, gB = gNew;
+          landed = std::abs(gNew - target) <= 1e-9 * std::abs(target);
+        }
+        if (!r.converged || !landed) {  // keep the crossing step
+          Thyra::copy(*xCross, x.ptr());
+          l = lCross, ds = dsCross, r = rCross;
+        } else if (rank == 0 && !quiet) {
+          std::cout << "  step " << step << ": arc shortened from " << dsCross << " to " << ds << " to land on the target\n";
+        }
+      }
     }
     rec.cutbacks = cut;
     rec.loadFactor = l;
