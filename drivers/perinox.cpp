@@ -21,8 +21,12 @@
 namespace {
 
 int usage(int code) {
-  std::cerr << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
-               "       perinox schema\n";
+  (code == 0 ? std::cout : std::cerr)
+      << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
+         "       perinox schema     every scene key with its default and meaning\n"
+         "       perinox --help\n"
+         "exit codes: 0 converged; 2 invalid input (nothing written); 3 a step failed for good\n"
+         "(last converged state written, reason in summary.json); 1 internal error\n";
   return code;
 }
 
@@ -34,6 +38,9 @@ std::string envOr(const char* name, const std::string& fallback) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before Kokkos sees the arguments: it answers --help with its own options.
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") return usage(0);
   Tpetra::ScopeGuard mpi(&argc, &argv);
   auto comm = Teuchos::DefaultComm<int>::getComm();
   const bool root = comm->getRank() == 0;
