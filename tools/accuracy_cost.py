@@ -114,8 +114,10 @@ def main():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
+        print("matplotlib is missing from this Python: the CSV is written, the plot is not "
+              "(run with /usr/bin/python3, which has python3-matplotlib)")
         return
-    fig, ax = plt.subplots(figsize=(8, 5.5))
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [1.6, 1]})
     markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/GMRES+MueLu": "^", "matrix-free/MueLu": "v",
                "matrix-free/ILU(asm)": "D", "Jacobian-free/ILU": "P", "ADR": "x"}
     colours = {"1.015": "C0", "2.015": "C1"}
@@ -127,6 +129,11 @@ def main():
                    edgecolors=colours[r["horizon"]], s=50)
         ax.annotate(r["particles"].strip("{}").replace(",", "x"), (r["wall_time_s"], r["error"]), fontsize=6,
                     xytext=(3, 3), textcoords="offset points")
+        # Right: Krylov iterations per linear solve (the preconditioner's quality) against size.
+        k, n = float(r.get("krylov_iterations") or 0), float(r.get("linear_solves") or 0)
+        if k > 0 and n > 0:
+            ax2.scatter(float(r["dofs"]), k / n, marker=markers[r["solver"]], facecolors=fill,
+                        edgecolors=colours[r["horizon"]], s=50)
     for name, m in markers.items():
         ax.scatter([], [], marker=m, color="k", label=name)
     for h, c in colours.items():
@@ -137,7 +144,13 @@ def main():
     ax.set_ylabel("relative error of the mid-span deflection vs FEM")
     ax.set_title("Clamped beam (seed 000, 4.2): accuracy against cost")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="lower right")
+    ax2.set_xscale("log")
+    ax2.set_yscale("log")
+    ax2.set_xlabel("unknowns")
+    ax2.set_ylabel("Krylov iterations per linear solve")
+    ax2.set_title("Iterative solvers: preconditioner quality")
+    ax2.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "accuracy_cost.png"), dpi=110)
     print("wrote", os.path.join(a.out, "accuracy_cost.csv"), "and accuracy_cost.png")
