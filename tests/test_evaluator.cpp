@@ -169,6 +169,35 @@ TEST_P(EvaluatorFD, MatrixFreeProductsMatchAssembledJacobian) {
   }
 }
 
+// The reaction norm kept from the last residual evaluation is returned only for that state and
+// load factor: every answer equals a fresh evaluator's, which has no cache.
+TEST(EvaluatorReaction, KeptNormMatchesFreshEvaluation) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  auto problem = makeProblem(2, 2.015, 0.0, true);
+  auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
+  auto fresh = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
+  auto space = ev->get_x_space();
+  auto x1 = Thyra::createMember(space), x2 = Thyra::createMember(space), f = Thyra::createMember(space);
+  fill(*x1, 7, 0.01);
+  fill(*x2, 8, 0.01);
+  auto check = [&](const Thyra::VectorBase<double>& x, const char* what) {
+    fresh->setLoadFactor(ev->loadFactor());
+    const double want = fresh->reactionNorm(x);
+    ASSERT_GT(want, 0.0);
+    EXPECT_NEAR(ev->reactionNorm(x), want, 1e-13 * want) << what;
+  };
+  ev->setLoadFactor(0.7);
+  auto in = ev->createInArgs();
+  in.set_x(x1);
+  auto out = ev->createOutArgs();
+  out.set_f(f);
+  ev->evalModel(in, out);
+  check(*x1, "the evaluated state");
+  check(*x2, "another state");
+  ev->setLoadFactor(0.3);
+  check(*x1, "the evaluated state at another load factor");
+}
+
 int main(int argc, char** argv) {
   Tpetra::ScopeGuard guard(&argc, &argv);
   ::testing::InitGoogleTest(&argc, argv);

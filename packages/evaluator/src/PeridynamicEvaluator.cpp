@@ -627,6 +627,10 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
   }
   auto fint = internalForce(*x, W);
   if (!f.is_null()) {
+    reactionNorm_ = reactionNormOf(*fint);
+    reactionLambda_ = lambda_;
+    if (reactionX_.is_null()) reactionX_ = x->clone_v();
+    else Thyra::copy(*x, reactionX_.ptr());
     auto ft = TOE::getTpetraVector(f);
     auto fd = ft->getDataNonConst();
     auto rd = fint->getData();
@@ -663,6 +667,7 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
 
 PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakBonds(const Thyra::VectorBase<double>& x) {
   BreakReport rep;
+  reactionX_ = Teuchos::null;
   const auto u = localDisplacements(x);
   long long local = model_->breakBonds(u);
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
@@ -673,6 +678,7 @@ PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakBonds(const Thyra::
 PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakMostStretched(const Thyra::VectorBase<double>& x,
                                                                           double tol, double& maxStretch) {
   BreakReport rep;
+  reactionX_ = Teuchos::null;
   const auto u = localDisplacements(x);
   const double mine = model_->maxIntactStretch(u);
   maxStretch = mine;
@@ -721,9 +727,8 @@ Eigen::Matrix3d PeridynamicEvaluator::rotationMatrix() const {
 
 double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextOwnedFree_->norm2(); }
 
-double PeridynamicEvaluator::reactionNorm(const Thyra::VectorBase<double>& x) const {
-  auto fint = internalForce(x, nullptr);
-  auto rd = fint->getData();
+double PeridynamicEvaluator::reactionNormOf(const TVector& fint) const {
+  auto rd = fint.getData();
   const int D = problem_->dim();
   double s = 0;
   for (int l = 0; l < model_->particles().numOwned; ++l)
@@ -732,6 +737,20 @@ double PeridynamicEvaluator::reactionNorm(const Thyra::VectorBase<double>& x) co
   double g = 0;
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, s, Teuchos::outArg(g));
   return std::sqrt(g);
+}
+
+double PeridynamicEvaluator::reactionNorm(const Thyra::VectorBase<double>& x) const {
+  if (!reactionX_.is_null() && reactionLambda_ == lambda_) {
+    // Every rank must take the same branch (the other one is collective).
+    auto a = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
+    auto b = TOE::getConstTpetraVector(reactionX_.getConst())->getData();
+    int same = a.size() == b.size() ? 1 : 0;
+    for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k] == b[k];
+    int all = 0;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, same, Teuchos::outArg(all));
+    if (all) return reactionNorm_;
+  }
+  return reactionNormOf(*internalForce(x, nullptr));
 }
 
 std::vector<double> PeridynamicEvaluator::reactionOn(const Thyra::VectorBase<double>& x,

@@ -160,6 +160,12 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
   mutable Teuchos::RCP<TCrsMatrix> precA_;
   mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
+  // The reaction norm of the last residual evaluation, with its state and load factor: the
+  // convergence test asks for it at the state NOX just evaluated, which then costs no second
+  // residual. Cleared whenever bonds break.
+  mutable Teuchos::RCP<Thyra::VectorBase<double>> reactionX_;
+  mutable double reactionNorm_ = 0.0, reactionLambda_ = 0.0;
+  double reactionNormOf(const TVector& fint) const;
 
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::shared_ptr<const ProblemSpec> problem_;
