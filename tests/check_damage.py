@@ -27,7 +27,7 @@
   particles included). The largest stretch of a bond whose midpoint lies more than R + dx/2 from
   the vertical axis is at most F times the largest stretch of a bond crossing the vertical axis
   above or below the hole: the hole's stress concentration, not a spurious (zero-energy) mode,
-  decides where bonds break first. Linear-elastic FEM on the 30 x 10 lattice gives 0.43
+  decides where bonds break first. Linear-elastic FEM on the 30 x 10 lattice gives 0.68
   (tools/ccx_plate_hole.py); the paper's G = 0.01 gives 1.00;
 - --max-stretch S: the largest bond stretch at the last step is at most S;
 - with several folders (e.g. 1 and 2 MPI ranks): identical damage fields, particle by particle.

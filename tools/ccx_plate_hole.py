@@ -15,7 +15,9 @@ Output (printed): the strain at the top of the hole (0, 10), the net-section nom
 the stress concentration; then, on the particle lattice of the scene (NX x NY particles, default
 30 x 10, horizon 3.015 dx, fictitious layers at x = +-(75 + dx/2 ...) moving with the ends), the
 bond stretch that the FE displacement field gives to every bond of the scene's families: its
-maximum and where, the maximum over bonds away from the hole (|x_mid| > 12.5 mm), and, with
+maximum and where, the maximum over the bonds crossing the vertical axis beside the hole
+(|y_mid| > 10 mm) and over the bonds away from it (|x_mid| > 10 mm + dx/2) and their ratio (the
+measure of tests/check_damage.py --stretch-far-ratio), and, with
 --out, per real particle the largest stretch of its bonds (id order of the lattice, columns
 x, y, max_stretch). This is the continuum's answer to "how far are the bonds stretched" that the
 peridynamic run without damage is compared with (docs/validation.md, damage section).
@@ -201,7 +203,7 @@ def main():
     fict = np.array([p[2] for p in pts])
     n = len(X)
     best = np.full(n, -np.inf)
-    top, top_far = (-1.0, None), (-1.0, None)
+    top, top_far, top_near = (-1.0, None), (-1.0, None), (-1.0, None)
     for i in range(n):
         d = X - X[i]
         r = np.hypot(d[:, 0], d[:, 1])
@@ -213,12 +215,18 @@ def main():
             mid = 0.5 * (X[i] + X[j])
             if s > top[0]:
                 top = (s, (X[i], X[j]))
-            if abs(mid[0]) > 12.5 and s > top_far[0]:
+            if abs(mid[0]) > R_HOLE + 0.5 * dx and s > top_far[0]:
                 top_far = (s, (X[i], X[j]))
+            if X[i][0] * X[j][0] < 0 and abs(mid[1]) > R_HOLE and s > top_near[0]:
+                top_near = (s, (X[i], X[j]))
     fmt = lambda b: "(%g, %g)-(%g, %g)" % (b[0][0], b[0][1], b[1][0], b[1][1])
     print("lattice %d x %d (dx %g, delta %g): largest FE bond stretch %.5f, bond %s"
           % (a.particles[0], a.particles[1], dx, delta, top[0], fmt(top[1])))
-    print("largest FE bond stretch away from the hole (|x_mid| > 12.5): %.5f, bond %s" % (top_far[0], fmt(top_far[1])))
+    print("largest FE bond stretch across the vertical axis beside the hole (|y_mid| > %g): %.5f, bond %s"
+          % (R_HOLE, top_near[0], fmt(top_near[1])))
+    print("largest FE bond stretch away from the hole (|x_mid| > %g): %.5f, bond %s; ratio to the one beside "
+          "the hole %.3f (check_damage.py --stretch-far-ratio)" % (R_HOLE + 0.5 * dx, top_far[0], fmt(top_far[1]),
+                                                                   top_far[0] / top_near[0]))
     if a.out:
         with open(a.out, "w") as f:
             f.write("# ccx_plate_hole.py --refine %d --particles %d %d\nx,y,max_stretch\n"
