@@ -19,9 +19,10 @@
   (phi >= 0.25), across which u_x jumps by at least half the separation of the ends (u_x of the
   right fictitious layer minus the left one). Why not "a particle with phi >= 0.5": a straight
   crack between two particle columns cuts only the bonds that cross it, which is less than half
-  of each neighbour's family (delta = 3.015 dx: 11 of 28 bonds inside, 4 of 9 in volume at the free
-  edge, measured phi 0.40-0.47), so that test fails on a clean crack and passes on scattered
-  damage with no separation; the opening is what tells a crack from diffuse damage;
+  of each neighbour's family (delta = 3.015 dx: 11 of 28 bonds inside, 7 of 17 on the free
+  edge; measured beside the crack: phi 0.45-0.53 at G = 0.5, below 0.5 in 4 of the 6 rows, and
+  0.40-0.47 at G = 1), so that test fails on a clean crack and passes on scattered damage with no
+  separation; the opening is what tells a crack from diffuse damage;
 - --stretch-far-ratio F (for a run without damage): the bond stretches at the last step, every
   bond of the scene's families (horizon factor and spacing from scene.resolved.xml, fictitious
   particles included). The largest stretch of a bond whose midpoint lies more than R + dx/2 from
