@@ -9,11 +9,16 @@ deformed real particles, Figs. 31 / 34), <tag>_ux.png (u_x on the deformed parti
 With NODAMAGE_RUN folders (the same plate, 'Damage/Enabled=false', e.g. G = 0, 0.001, 0.01): the
 u_x profiles along the horizontal and vertical axes (Fig. 32) as <tag>_profiles.csv and .png.
 Deformations are magnified by --scale (default 50: the end displacement is 0.1 mm on 150 mm).
+With --stretch DIR [DIR ...] (runs without damage, e.g. G = 0.01 and 0.5) and optionally --fe CSV
+(tools/ccx_plate_hole.py --out): <tag>_stretch.png, the largest bond stretch of each real particle
+(its bonds as perinox builds the families) at the last step, one panel per run and the FEM's on
+the same colour scale: where a spurious mode, rather than the hole, stretches the bonds.
 """
 import argparse
 import csv
 import json
 import os
+import sys
 
 import matplotlib
 
@@ -56,15 +61,56 @@ def profile(d, name):
         return [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
 
+def stretch_figure(runs, fe_csv, path):
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+    from check_damage import bond_stretches  # the checks' own bond set and stretch
+    panels = []
+    for d in runs:
+        _, bonds = bond_stretches(d)
+        best = {}
+        for xi, yi, xj, yj, st in bonds:
+            for k in ((xi, yi), (xj, yj)):
+                best[k] = max(best.get(k, -1.0), st)
+        real = {(r["x"], r["y"]) for r in fields(d) if r["fictitious"] == 0}
+        G = "?"
+        with open(os.path.join(d, "scene.resolved.xml")) as f:
+            for line in f:
+                if 'name="G"' in line:
+                    G = "%g" % float(line.split('value="')[1].split('"')[0])
+        pts = [(x, y, best[(x, y)]) for (x, y) in real]
+        panels.append(("perinox, no damage, G = %s: largest %.4f" % (G, max(p[2] for p in pts)), pts))
+    if fe_csv:
+        with open(fe_csv) as f:
+            pts = [(float(r["x"]), float(r["y"]), float(r["max_stretch"]))
+                   for r in csv.DictReader(line for line in f if not line.startswith("#"))]
+        panels.append(("linear-elastic FEM (CalculiX) on the same bonds: largest %.4f" % max(p[2] for p in pts), pts))
+    vmax = 2.0 * max(p[2] for p in panels[-1][1]) if fe_csv else max(max(p[2] for p in q[1]) for q in panels)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), squeeze=False)
+    for ax, (title, pts) in zip(axes[:, 0], panels):
+        sc = ax.scatter([p[0] for p in pts], [p[1] for p in pts], c=[p[2] for p in pts], s=110, marker="s",
+                        cmap="viridis", vmin=0.0, vmax=vmax)
+        ax.set_aspect("equal")
+        ax.set_title(title, fontsize=9)
+        fig.colorbar(sc, ax=ax, shrink=0.9, extend="max", label="largest bond stretch")
+    axes[-1, 0].set_xlabel("x (mm)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
     ap.add_argument("--tag", required=True)
     ap.add_argument("--scale", type=float, default=50.0)
+    ap.add_argument("--stretch", nargs="+", default=[], help="runs without damage for <tag>_stretch.png")
+    ap.add_argument("--fe", help="FEM largest bond stretch per particle (tools/ccx_plate_hole.py --out)")
     ap.add_argument("damage_run")
     ap.add_argument("nodamage_runs", nargs="*")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    if a.stretch:
+        stretch_figure(a.stretch, a.fe, os.path.join(a.out, a.tag + "_stretch.png"))
     s = summary(a.damage_run)
     rows = fields(a.damage_run)
     G = s["scene"].get("G", "?") if isinstance(s.get("scene"), dict) else "?"
