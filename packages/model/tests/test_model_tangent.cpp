@@ -388,7 +388,9 @@ TEST(Model, ControlTangentsMatchFiniteDifferences) {
       model->enableControl(ControlSpec{kind, 3.0e9});
       const auto [err, asym] = tangentErrors(*model, d, u);
       EXPECT_LT(err, 1e-6) << "dim " << dim;
-      if (kind == ControlSpec::Kind::Springs) EXPECT_LT(asym, 1e-10);
+      if (kind == ControlSpec::Kind::Springs) {
+        EXPECT_LT(asym, 1e-10);
+      }
     }
   }
 }
