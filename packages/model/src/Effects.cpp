@@ -64,7 +64,16 @@ template <int D>
 void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
   MatD<D> P;
   TangentD<D> A;
-  piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
+  if (w.cache && !w.cacheFresh) {  // the state of the previous product: P(F) and A(F) kept
+    P = Eigen::Map<const MatD<D>>(w.cache);
+    A = Eigen::Map<const TangentD<D>>(w.cache + D * D);
+  } else {
+    piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
+    if (w.cache) {
+      Eigen::Map<MatD<D>>(w.cache) = P;
+      Eigen::Map<TangentD<D>>(w.cache + D * D) = A;
+    }
+  }
   const MatD<D> dP = contract<D>(A, w.dF);
   for (int l = 0; l < w.m; ++l) {
     w.t[l].noalias() += P * w.h[l];

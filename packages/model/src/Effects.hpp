@@ -16,6 +16,7 @@ class CorrespondenceEffect final : public ForceEffect<D> {
   const char* name() const override { return "correspondence"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
+  int cacheSize() const override { return D * D + D * D * D * D; }  // P and A = dP/dF
 
  private:
   const Material& material_;

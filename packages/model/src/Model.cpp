@@ -45,6 +45,7 @@ struct Model::Impl {
   virtual void applyTangent(const Model& m, const std::vector<double>& u, const std::vector<double>& v,
                             double* jv) const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
+  virtual void invalidate() = 0;
 };
 
 namespace {
@@ -58,6 +59,7 @@ struct ImplD final : Model::Impl {
 
   void setDamage(const DamageSpec* d) override {
     if (d) damage = *d;
+    linValid_ = false;
   }
   void addControl(const ControlSpec& c) override { effects.push_back(std::make_unique<ControlEffect<D>>(c)); }
   void addStressPoints(const Material& m, unsigned seed) override {
@@ -98,10 +100,26 @@ struct ImplD final : Model::Impl {
     }
   }
 
+  // The linearisation kept between matrix-free products: the state it belongs to and, per
+  // effect, cacheSize() doubles per owned particle.
+  mutable std::vector<double> linU_;
+  mutable std::vector<std::vector<double>> linCache_;
+  mutable bool linValid_ = false;
+  void invalidate() override { linValid_ = false; }
+
   void applyTangent(const Model& model, const std::vector<double>& u, const std::vector<double>& v,
                     double* jv) const override {
     const LocalParticles& p = model.particles();
+    const bool fresh = !(linValid_ && linU_ == u);
+    if (fresh) {
+      linValid_ = false;
+      linU_ = u;
+      linCache_.resize(effects.size());
+      for (std::size_t e = 0; e < effects.size(); ++e)
+        linCache_[e].resize(static_cast<std::size_t>(p.numOwned) * effects[e]->cacheSize());
+    }
     BondWork<D> w;
+    w.cacheFresh = fresh;
     for (int i = 0; i < p.numOwned; ++i) {
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
@@ -114,7 +132,11 @@ struct ImplD final : Model::Impl {
         w.dF.noalias() += w.Vj[l] * w.dY[l] * w.h[l].transpose();
       }
       try {
-        for (const auto& e : effects) e->addDirectional(w);
+        for (std::size_t e = 0; e < effects.size(); ++e) {
+          const int cs = effects[e]->cacheSize();
+          w.cache = cs > 0 ? linCache_[e].data() + static_cast<std::size_t>(i) * cs : nullptr;
+          effects[e]->addDirectional(w);
+        }
       } catch (const EvaluationError& e) {
         std::ostringstream msg;
         msg << e.what() << " at particle " << p.globalId[i] << " (X = " << p.X[i].head(D).transpose() << ")";
@@ -130,6 +152,7 @@ struct ImplD final : Model::Impl {
         }
       }
     }
+    linValid_ = true;  // (an evaluation error above leaves it invalid)
   }
 
   void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) override {
@@ -143,6 +166,7 @@ struct ImplD final : Model::Impl {
   }
   void prepare(const LocalParticles& p) override {
     for (auto& e : effects) e->prepare(p);
+    linValid_ = false;
   }
 
   /// Fills the kinematics of particle i: bonds, K, K^-1, F, h_j.
@@ -375,6 +399,8 @@ long long Model::breakBondsAbove(const std::vector<double>& u, double sBreak) {
   });
   return broken;
 }
+
+void Model::familiesChanged() { impl_->invalidate(); }
 
 void Model::isolate(const std::vector<long long>& globalIds) {
   if (globalIds.empty()) return;

@@ -524,6 +524,31 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       for (int k = 0; k < n * D; ++k) diff = std::max(diff, std::abs(jv[k] - ref[k]));
       ASSERT_GT(ref.cwiseAbs().maxCoeff(), 0.0);
       EXPECT_LT(diff, 1e-12 * ref.cwiseAbs().maxCoeff()) << c.name << ", dim " << dim;
+      // The model keeps the linearisation between products at one state: a second direction at
+      // the same state, a new state, and the same state after bonds broke must each equal the
+      // assembled tangent there (a stale linearisation would not).
+      auto againstAssembled = [&](const std::vector<double>& uu, const std::vector<double>& vv, const char* what) {
+        DenseSink ss(D, n);
+        model.evaluate(uu, ss, true);
+        Eigen::VectorXd vve(n * D);
+        for (int k = 0; k < n * D; ++k) vve[k] = vv[k];
+        const Eigen::VectorXd r = ss.K * vve;
+        std::vector<double> y(n * D, 0.0);
+        model.applyTangent(uu, vv, y.data());
+        double dd = 0;
+        for (int k = 0; k < n * D; ++k) dd = std::max(dd, std::abs(y[k] - r[k]));
+        ASSERT_GT(r.cwiseAbs().maxCoeff(), 0.0) << c.name << ", dim " << dim << ": " << what;
+        EXPECT_LT(dd, 1e-12 * r.cwiseAbs().maxCoeff()) << c.name << ", dim " << dim << ": " << what;
+      };
+      againstAssembled(u, randomDisplacement(n, D, 1.0, 29), "second direction, same state");
+      auto u2 = u;
+      for (int i = 0; i < n; ++i) u2[i * D] += 0.0005 * d.X[i][0] * d.X[i][0] / d.dx;
+      againstAssembled(u2, v, "new state");
+      if (c.dmg && !c.sp) {
+        model.applyTangent(u2, v, jv.data());
+        ASSERT_GT(model.breakBondsAbove(u2, model.maxIntactStretch(u2) - 1e-14), 0) << c.name;
+        againstAssembled(u2, v, "same state, bonds broken");
+      }
     }
   }
 }

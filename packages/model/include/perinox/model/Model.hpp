@@ -71,6 +71,11 @@ struct BondWork {
   std::vector<Vec> dY;         // dY_l = v_j - v_i
   Mat dF;                      // dF = sum_l V_l dY_l (x) h_l
   std::vector<Vec> dt;         // dT_i<xi_ij>[v], accumulated by the effects
+  // Matrix-free products repeat at one state (one per Krylov iteration): an effect may keep
+  // per-particle data of its linearisation in cache (cacheSize() doubles, or nullptr), filling
+  // it when cacheFresh and reading it otherwise.
+  double* cache = nullptr;
+  bool cacheFresh = false;
 };
 
 /// One effect: adds its bond force states (and their derivatives) for particle i.
@@ -86,6 +91,8 @@ class ForceEffect {
   /// Adds the force states to w.t and their directional derivative along w.dY (with w.dF) to
   /// w.dt, without forming dT/du: the kernel of the matrix-free Jacobian-vector product.
   virtual void addDirectional(BondWork<D>& w) const = 0;
+  /// Doubles per particle this effect keeps between matrix-free products at one state (0: none).
+  virtual int cacheSize() const { return 0; }
 };
 
 /// Receives element contributions. particles: local ids of the element (i first);
@@ -219,6 +226,7 @@ class Model {
   /// Keeps only the bonds (i_local, j_local) for which keep returns true.
   template <class Pred>
   void removeBondsIf(Pred keep);
+  void familiesChanged();  // drops the kept linearisation of the matrix-free product
 
  struct Impl;  // dimension-specific implementation (Model.cpp)
 
@@ -248,6 +256,7 @@ void Model::removeBondsIf(Pred keep) {
   }
   particles_.famOffset.swap(off);
   particles_.famIndex.swap(idx);
+  familiesChanged();
 }
 
 }  // namespace perinox
