@@ -297,7 +297,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
                 << r.iterations << "  residual " << r.residuals.back()
                 << (deflProbe >= 0 ? "  deflection " : "") << (deflProbe >= 0 ? std::to_string(defl.back()) : "")
                 << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
-                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << "\n";
+                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::endl;
     if (r.iterations <= scene.solver.easyIterations) ds = std::min(A.maximum, 1.5 * ds);
   }
 }
@@ -437,7 +437,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   bool ok = true;
   if (rank == 0 && !options.quiet)
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
-              << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << "\n";
+              << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << std::endl;
   const bool arcLength = scene.solver.continuation == "Arc Length";
   if (arcLength) ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
   while (!arcLength && lambda < 1.0 - 1e-12) {
@@ -638,7 +638,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
                 << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
                 << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
-                << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << "\n";
+                << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
     if (scene.solver.adaptive) {
       // Adaptive stepping: grow after easy steps, up to Max Increment (cut-backs shrink it).
