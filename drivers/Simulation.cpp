@@ -456,9 +456,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     StepRecord rec;
     rec.step = step;
     NewtonResult nr;
-    // The work of the step so far, every attempt included.
+    long long adrIterations = 0;  // ADR: its iterations, every attempt of the step
+    // The work of the step so far, every attempt included (ADR's iterations count as Newton's).
     auto account = [&](StepRecord& r) {
-      r.newtonIterationsAll = newton.totalNewtonIterations() - newtonBefore;
+      r.newtonIterationsAll = newton.totalNewtonIterations() - newtonBefore + adrIterations;
       r.linearSolves = newton.totalLinear().solves - linearBefore.solves;
       r.krylovIterations = newton.totalLinear().krylovIterations - linearBefore.krylovIterations;
     };
@@ -487,6 +488,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         nr = NewtonResult();
         nr.converged = ar.converged;
         nr.iterations = static_cast<int>(std::min<long long>(ar.iterations, 2000000000));
+        adrIterations += ar.iterations;
         nr.residuals = {ar.e1, ar.e2};
         nr.failure = ar.failure;
       } else {
@@ -552,7 +554,6 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     rec.elapsed = now() - tStep;
     if (!nr.converged) rec.residuals = nr.residuals;
     account(rec);
-    if (scene.solver.method == "ADR") rec.newtonIterationsAll = nr.iterations;
     res.steps.push_back(rec);
     if (!nr.converged) {
       ok = false;
