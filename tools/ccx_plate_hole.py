@@ -26,41 +26,15 @@ import argparse
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ccx_seed001 import read_frd, run_ccx  # noqa: E402  (CalculiX job runner and .frd reader)
+
 E, NU, R_HOLE, HX, HY, UEND = 210000.0, 0.33, 10.0, 75.0, 25.0, 0.1
-
-
-def run_ccx(work, job, lines, threads):
-    with open(os.path.join(work, job + ".inp"), "w") as f:
-        f.write("\n".join(lines) + "\n")
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), CCX_NPROC_STIFFNESS=str(threads),
-               CCX_NPROC_EQUATION_SOLVER=str(threads))
-    r = subprocess.run(["ccx", "-i", job], cwd=work, env=env, stdout=subprocess.PIPE,
-                       stderr=subprocess.STDOUT, universal_newlines=True)
-    if r.returncode != 0 or "*ERROR" in r.stdout:
-        sys.stderr.write(r.stdout[-3000:])
-        sys.exit("ccx failed (job files in %s)" % work)
-
-
-def read_frd(path):
-    out, name = {}, None
-    with open(path) as f:
-        for line in f:
-            if line.startswith(" -4"):
-                name = line.split()[1]
-                out[name] = {}
-            elif line.startswith(" -3"):
-                name = None
-            elif name and line.startswith(" -1"):
-                node = int(line[3:13])
-                out[name][node] = [float(line[13 + 12 * k:25 + 12 * k])
-                                   for k in range((len(line.rstrip("\n")) - 13) // 12)]
-    return out
 
 
 def mesh(R):
