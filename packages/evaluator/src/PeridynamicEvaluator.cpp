@@ -247,6 +247,7 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
           f[k++] = d.volume[g] * P.bodyForce[g * D + c];
         }
   }
+  fextNorm_ = fextOwnedFree_->norm2();
 }
 
 PeridynamicEvaluator::Graphs PeridynamicEvaluator::buildGraphs(bool neighbours) const {
@@ -627,10 +628,12 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
   }
   auto fint = internalForce(*x, W);
   if (!f.is_null()) {
-    reactionNorm_ = reactionNormOf(*fint);
-    reactionLambda_ = lambda_;
-    if (reactionX_.is_null()) reactionX_ = x->clone_v();
-    else Thyra::copy(*x, reactionX_.ptr());
+    if (!(externalForceNorm() > 0)) {
+      reactionNorm_ = reactionNormOf(*fint);
+      reactionLambda_ = lambda_;
+      if (reactionX_.is_null()) reactionX_ = x->clone_v();
+      else Thyra::copy(*x, reactionX_.ptr());
+    }
     auto ft = TOE::getTpetraVector(f);
     auto fd = ft->getDataNonConst();
     auto rd = fint->getData();
@@ -646,14 +649,13 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
             ++k;
           }
     } else {
-      // Dead loads turn with the body: lambda R f_bar (a free particle has all components free).
+      // Dead loads turn with the body: lambda R f_bar. A free particle has all its components
+      // free (the scene checks), so its f_bar is fe[k .. k + D - 1].
       const Eigen::Matrix3d R = rotationMatrix();
-      const Discretization& d = problem_->disc;
       for (int l = 0; l < lp.numOwned; ++l) {
         if (overlapFreeLid_[l * D] < 0) continue;
-        const long long g = lp.globalId[l];
         Vec3 fb = Vec3::Zero();
-        for (int a = 0; a < D; ++a) fb[a] = d.volume[g] * problem_->bodyForce[g * D + a];
+        for (int a = 0; a < D; ++a) fb[a] = fe[k + a];
         const Vec3 fr = R * fb;
         for (int c = 0; c < D; ++c, ++k) fd[k] = rd[l * D + c] - lambda_ * fr[c];
       }
@@ -725,7 +727,7 @@ Eigen::Matrix3d PeridynamicEvaluator::rotationMatrix() const {
   return Eigen::AngleAxisd(lambda_ * r.angle, r.axis).toRotationMatrix();
 }
 
-double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextOwnedFree_->norm2(); }
+double PeridynamicEvaluator::externalForceNorm() const { return std::abs(lambda_) * fextNorm_; }
 
 double PeridynamicEvaluator::reactionNormOf(const TVector& fint) const {
   auto rd = fint.getData();
@@ -745,7 +747,7 @@ double PeridynamicEvaluator::reactionNorm(const Thyra::VectorBase<double>& x) co
     auto a = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
     auto b = TOE::getConstTpetraVector(reactionX_.getConst())->getData();
     int same = a.size() == b.size() ? 1 : 0;
-    for (std::size_t k = 0; same && k < a.size(); ++k) same = a[k] == b[k];
+    for (decltype(a.size()) k = 0; same && k < a.size(); ++k) same = a[k] == b[k];
     int all = 0;
     Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MIN, same, Teuchos::outArg(all));
     if (all) return reactionNorm_;

@@ -160,9 +160,9 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
   mutable Teuchos::RCP<TCrsMatrix> precA_;
   mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
-  // The reaction norm of the last residual evaluation, with its state and load factor: the
-  // convergence test asks for it at the state NOX just evaluated, which then costs no second
-  // residual. Cleared whenever bonds break.
+  // The reaction norm of the last residual evaluation, with its state and load factor, kept
+  // when no external force acts (only then do the convergence tests normalise by it): asked for
+  // at the state NOX just evaluated, it then costs no second residual. Cleared when bonds break.
   mutable Teuchos::RCP<Thyra::VectorBase<double>> reactionX_;
   mutable double reactionNorm_ = 0.0, reactionLambda_ = 0.0;
   double reactionNormOf(const TVector& fint) const;
@@ -180,6 +180,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<Tpetra::Import<LO, GO>> allImport_;
   Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_, freeExport_;
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
+  double fextNorm_ = 0.0;                 // its global 2-norm (the load never changes)
   // Detached particles: their free DOFs are frozen, f = k (x - x_frozen), W_ii = k.
   std::vector<long long> detachedAll_;
   std::vector<std::pair<int, double>> frozen_;  // (owned free lid, frozen value)
