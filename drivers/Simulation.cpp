@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <sys/resource.h>
@@ -110,6 +111,170 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
     }
   }
   writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", csv.str());
+}
+
+/// One step's record as summary.json writes it (and a checkpoint keeps it).
+nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
+  nlohmann::json j = {{"step", s.step},
+                      {"load_factor", s.loadFactor},
+                      {"newton_iterations", s.newtonIterations},
+                      {"newton_iterations_all_attempts", s.newtonIterationsAll},
+                      {"linear_solves", s.linearSolves},
+                      {"krylov_iterations", s.krylovIterations},
+                      {"residuals", s.residuals},
+                      {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
+                      {"cutbacks", s.cutbacks},
+                      {"converged_at_roundoff_floor", s.atRoundoffFloor},
+                      {"roundoff_floor", s.floor},
+                      {"broken_bonds", s.brokenBonds},
+                      {"break_rounds", s.breakRounds},
+                      {"detached", s.detached},
+                      {"time_s", s.elapsed}};
+  if (arcLength) j["arc_length"] = s.arcLength;
+  if (s.negativePivots >= -1) j["negative_pivots"] = s.negativePivots;
+  if (damage) {
+    j["stall_broken_bonds"] = s.stallBrokenBonds;
+    j["reload_steps"] = s.reloadSteps;
+    if (s.stallBrokenBonds > 0) j["stall_max_stretch"] = s.stallStretch;
+  }
+  return j;
+}
+
+StepRecord stepFromJson(const nlohmann::json& j) {
+  StepRecord s;
+  s.step = j.at("step");
+  s.loadFactor = j.at("load_factor");
+  s.newtonIterations = j.at("newton_iterations");
+  s.newtonIterationsAll = j.at("newton_iterations_all_attempts");
+  s.linearSolves = j.at("linear_solves");
+  s.krylovIterations = j.at("krylov_iterations");
+  s.residuals = j.at("residuals").get<std::vector<double>>();
+  s.reactionNormalised = j.at("normalised_by") == "reaction";
+  s.cutbacks = j.at("cutbacks");
+  s.atRoundoffFloor = j.at("converged_at_roundoff_floor");
+  s.floor = j.at("roundoff_floor");
+  s.brokenBonds = j.at("broken_bonds");
+  s.breakRounds = j.at("break_rounds");
+  s.detached = j.at("detached").get<std::vector<long long>>();
+  s.elapsed = j.at("time_s");
+  s.arcLength = j.value("arc_length", 0.0);
+  s.negativePivots = j.value("negative_pivots", -2);
+  s.stallBrokenBonds = j.value("stall_broken_bonds", 0LL);
+  s.reloadSteps = j.value("reload_steps", 0);
+  s.stallStretch = j.value("stall_max_stretch", 0.0);
+  return s;
+}
+
+std::string resolvedSceneText(const Scene& scene) {
+  std::ostringstream s;
+  Teuchos::writeParameterListToXmlOStream(*scene.resolved, s);
+  return s.str();
+}
+
+/// Everything a load-stepping run needs to go on from a converged step. Vectors, bonds and
+/// frozen DOFs are by global id, so a checkpoint can be resumed on any number of ranks.
+/// Files: state.json (rank 0: counters, step records, probes) and rank_R.txt per writing rank
+/// (lines "x GID X XPREV", "bond GID_I GID_J", "frozen GID VALUE"; doubles in hexadecimal, so a
+/// resumed run starts from bit-identical numbers).
+struct Checkpoint {
+  nlohmann::json state;
+  std::vector<std::pair<long long, double>> x, xPrevious, frozen;
+  std::vector<std::pair<long long, long long>> broken;
+};
+
+void writeCheckpoint(const std::string& dir, const nlohmann::json& state, const PeridynamicEvaluator& ev,
+                     const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious,
+                     const Teuchos::Comm<int>& comm) {
+  const int rank = comm.getRank();
+  const std::string tmp = dir + ".writing";
+  if (rank == 0) {
+    fs::remove_all(tmp);
+    fs::create_directories(tmp);
+  }
+  comm.barrier();
+  {
+    std::ostringstream out;
+    out << std::hexfloat;
+    const auto xv = ev.ownedFreeValues(x), pv = ev.ownedFreeValues(xPrevious);
+    for (std::size_t k = 0; k < xv.size(); ++k) out << "x " << xv[k].first << ' ' << xv[k].second << ' ' << pv[k].second << '\n';
+    for (const auto& [a, b] : ev.ownedBrokenBonds()) out << "bond " << a << ' ' << b << '\n';
+    for (const auto& [g, v] : ev.ownedFrozenDofs()) out << "frozen " << g << ' ' << v << '\n';
+    writeFileAtomic(tmp + "/rank_" + std::to_string(rank) + ".txt", out.str());
+  }
+  comm.barrier();
+  if (rank == 0) {
+    nlohmann::json st = state;
+    st["ranks"] = comm.getSize();
+    writeFileAtomic(tmp + "/state.json", st.dump(1) + "\n");
+    // Replace the previous checkpoint only once the new one is complete.
+    fs::remove_all(dir);
+    fs::rename(tmp, dir);
+  }
+  comm.barrier();
+}
+
+/// Reads a checkpoint written for this scene; throws std::invalid_argument naming the problem.
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
+  Checkpoint c;
+  const std::string where = "checkpoint '" + dir + "'";
+  std::ifstream sj(dir + "/state.json");
+  if (!sj) throw std::invalid_argument(where + ": no state.json there (not a checkpoint, or one still being written)");
+  try {
+    c.state = nlohmann::json::parse(sj);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(where + ": state.json is not valid JSON (" + e.what() + ")");
+  }
+  if (c.state.value("format", 0) != 1 || !c.state.contains("scene") || !c.state.contains("ranks"))
+    throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 1)");
+  const std::string mine = resolvedSceneText(scene), theirs = c.state["scene"].get<std::string>();
+  if (mine != theirs) {
+    std::istringstream a(mine), b(theirs);
+    std::string la, lb;
+    int line = 0;
+    while (true) {
+      ++line;
+      const bool ga = static_cast<bool>(std::getline(a, la)), gb = static_cast<bool>(std::getline(b, lb));
+      if (!ga || !gb || la != lb) break;
+    }
+    auto trim = [](std::string t) {
+      t.erase(0, t.find_first_not_of(" \t"));
+      return t;
+    };
+    throw std::invalid_argument(where + " was written for another scene (the same scene file and the same --set "
+                                "options are needed); resolved scene line " + std::to_string(line) + ": now '" +
+                                trim(la) + "', in the checkpoint '" + trim(lb) + "'");
+  }
+  const int ranks = c.state["ranks"];
+  for (int r = 0; r < ranks; ++r) {
+    const std::string f = dir + "/rank_" + std::to_string(r) + ".txt";
+    std::ifstream in(f);
+    if (!in) throw std::invalid_argument(where + ": " + f + " is missing");
+    std::string line, kind;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      ls >> kind;
+      long long g = 0, h = 0;
+      std::string v1, v2;
+      bool ok = true;
+      if (kind == "x") {
+        ok = static_cast<bool>(ls >> g >> v1 >> v2);
+        if (ok) {
+          c.x.emplace_back(g, std::strtod(v1.c_str(), nullptr));
+          c.xPrevious.emplace_back(g, std::strtod(v2.c_str(), nullptr));
+        }
+      } else if (kind == "bond") {
+        ok = static_cast<bool>(ls >> g >> h);
+        if (ok) c.broken.emplace_back(g, h);
+      } else if (kind == "frozen") {
+        ok = static_cast<bool>(ls >> g >> v1);
+        if (ok) c.frozen.emplace_back(g, std::strtod(v1.c_str(), nullptr));
+      } else {
+        ok = false;
+      }
+      if (!ok) throw std::invalid_argument(where + ": unreadable line in " + f + ": '" + line + "'");
+    }
+  }
+  return c;
 }
 
 /// Pseudo-arc-length continuation from the converged state (xConv, lambda): secant predictor
@@ -328,6 +493,26 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   }
   res.particles = scene.problem->disc.size();
   res.dofs = evaluator->numFreeDofs();
+  const bool arcLength = scene.solver.continuation == "Arc Length";
+  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
+  const std::string checkpointDir = options.checkpointDir.empty() ? options.outputDir + ".checkpoint" : options.checkpointDir;
+  if (arcLength && (checkpoints || !options.restartFrom.empty()))
+    throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
+                                "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
+  std::optional<Checkpoint> resume;
+  if (!options.restartFrom.empty()) {
+    resume = readCheckpoint(options.restartFrom, scene);
+    std::vector<long long> ids;
+    for (const auto& e : resume->x) ids.push_back(e.first);
+    std::sort(ids.begin(), ids.end());
+    const bool complete = static_cast<long long>(ids.size()) == res.dofs &&
+                          std::adjacent_find(ids.begin(), ids.end()) == ids.end() &&
+                          (ids.empty() || (ids.front() == 0 && ids.back() == res.dofs - 1));
+    if (!complete)
+      throw std::invalid_argument("checkpoint '" + options.restartFrom + "' holds " + std::to_string(ids.size()) +
+                                  " displacement values for " + std::to_string(res.dofs) +
+                                  " free DOFs (damaged or from another discretisation)");
+  }
 
   const std::string staging = options.outputDir + ".partial";
   if (rank == 0) {
@@ -353,6 +538,18 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   // increment. It starts Newton near the new equilibrium, which matters under large rotation.
   auto xPrevious = x->clone_v();
   double lastIncrement = 0.0;
+  // The first step has no increment to extrapolate. When displacements are prescribed, starting
+  // Newton from the unloaded body puts the whole prescribed jump into the bonds next to the
+  // loaded particles (at 150 x 50 on the damaged plate: stretch 0.0067 there, past s_cr, the
+  // tangent nearly singular, the first step stagnated and inverted F). The tangent predictor
+  // moves the body with the load first: x = x_0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda,
+  // one linear solve at the unloaded state. Pure dead loads do not need it (it equals Newton's
+  // first iteration there).
+  bool prescribedMotion = scene.problem->rotates();
+  for (double v : scene.problem->prescribed)
+    if (v != 0.0) prescribedMotion = true;
+  Teuchos::RCP<Thyra::VectorBase<double>> firstTangent;
+  LinearSolveCounts tangentCounts;
 
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
@@ -438,7 +635,31 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   if (rank == 0 && !options.quiet)
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
               << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << std::endl;
-  const bool arcLength = scene.solver.continuation == "Arc Length";
+  double elapsedBefore = 0;  // wall time of the earlier segments of a resumed run
+  int segment = 1;
+  if (resume) {
+    const auto& st = resume->state;
+    step = st.at("step");
+    lambda = st.at("lambda");
+    increment = st.at("increment");
+    lastIncrement = st.at("last_increment");
+    stallBreaks = st.at("stall_breaks");
+    elapsedBefore = st.at("elapsed_s");
+    segment = st.at("segment").get<int>() + 1;
+    for (const auto& sj : st.at("steps")) res.steps.push_back(stepFromJson(sj));
+    res.pathLoadFactors = st.at("path_load_factors").get<std::vector<double>>();
+    for (std::size_t k = 0; k < res.probes.size(); ++k)
+      res.probes[k].second = st.at("probes").at(k).get<std::vector<std::pair<double, std::vector<double>>>>();
+    evaluator->restoreDamage(resume->broken, st.at("detached").get<std::vector<long long>>(), resume->frozen);
+    evaluator->setOwnedFreeValues(*xConverged, resume->x);
+    evaluator->setOwnedFreeValues(*xPrevious, resume->xPrevious);
+    Thyra::copy(*xConverged, x.ptr());
+    evaluator->setLoadFactor(lambda);
+    if (rank == 0 && !options.quiet)
+      std::cout << "resumed from " << options.restartFrom << " after step " << step << " at load factor " << lambda
+                << " (" << evaluator->detachedParticles().size() << " detached particle(s))" << std::endl;
+  }
+  double lastCheckpoint = now();
   if (arcLength) ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
   while (!arcLength && lambda < 1.0 - 1e-12) {
     if (step >= scene.solver.maxTotalSteps) {
@@ -450,6 +671,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       break;
     }
     ++step;
+    tangentCounts = LinearSolveCounts();  // the first step's tangent predictor counts in that step only
     const double tStep = now();
     const long long newtonBefore = newton.totalNewtonIterations();
     const LinearSolveCounts linearBefore = newton.totalLinear();
@@ -460,11 +682,24 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     // The work of the step so far, every attempt included (ADR's iterations count as Newton's).
     auto account = [&](StepRecord& r) {
       r.newtonIterationsAll = newton.totalNewtonIterations() - newtonBefore + adrIterations;
-      r.linearSolves = newton.totalLinear().solves - linearBefore.solves;
-      r.krylovIterations = newton.totalLinear().krylovIterations - linearBefore.krylovIterations;
+      r.linearSolves = newton.totalLinear().solves - linearBefore.solves + tangentCounts.solves;
+      r.krylovIterations =
+          newton.totalLinear().krylovIterations - linearBefore.krylovIterations + tangentCounts.krylovIterations;
     };
     int cut = 0;
     const double stepIncrement = increment;
+    if (scene.solver.predictor && lastIncrement == 0 && step == 1 && prescribedMotion &&
+        scene.solver.method != "ADR") {
+      ArcLengthSolver path(evaluator, ArcLengthOptions());
+      firstTangent = xConverged->clone_v();
+      const std::string why = path.tangent(*xConverged, lambda, *firstTangent);
+      tangentCounts = path.totalLinear();
+      if (!why.empty()) {
+        firstTangent = Teuchos::null;  // Newton starts from the unloaded body instead
+        if (rank == 0 && !options.quiet)
+          std::cout << "  step 1: no tangent predictor (" << why << "); Newton starts from the unloaded body\n";
+      }
+    }
     for (;;) {
       const double target = std::min(1.0, lambda + increment);
       evaluator->setLoadFactor(target);
@@ -473,6 +708,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
         const double a = (target - lambda) / lastIncrement;
         Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged, -a, *xPrevious);
+      } else if (firstTangent && step == 1) {
+        Thyra::Vp_StV(x.ptr(), target - lambda, *firstTangent);
       }
       if (scene.solver.method == "ADR") {
         AdrOptions ao;
@@ -647,6 +884,35 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     } else if (increment < 1.0 / N && nr.iterations <= 6) {
       increment = std::min(1.0 / N, 2 * increment);
     }
+    if (checkpoints) {
+      int due = (options.checkpointSteps > 0 && step % options.checkpointSteps == 0) ||
+                (options.checkpointSeconds > 0 && now() - lastCheckpoint >= options.checkpointSeconds);
+      Teuchos::broadcast(*comm, 0, Teuchos::outArg(due));  // clocks differ between ranks
+      if (due) {
+        nlohmann::json st;
+        st["format"] = 1;
+        st["scene"] = resolvedSceneText(scene);
+        st["step"] = step;
+        st["lambda"] = lambda;
+        st["increment"] = increment;
+        st["last_increment"] = lastIncrement;
+        st["stall_breaks"] = stallBreaks;
+        st["elapsed_s"] = now() - t0 + elapsedBefore;
+        st["segment"] = segment;
+        nlohmann::json steps = nlohmann::json::array();
+        for (const auto& sr : res.steps) steps.push_back(stepJson(sr, true, false));
+        st["steps"] = steps;
+        st["path_load_factors"] = res.pathLoadFactors;
+        nlohmann::json probes = nlohmann::json::array();
+        for (const auto& pr : res.probes) probes.push_back(pr.second);
+        st["probes"] = probes;
+        st["detached"] = evaluator->detachedParticles();
+        writeCheckpoint(checkpointDir, st, *evaluator, *xConverged, *xPrevious, *comm);
+        lastCheckpoint = now();
+        if (rank == 0 && !options.quiet)
+          std::cout << "  checkpoint after step " << step << " in " << checkpointDir << std::endl;
+      }
+    }
   }
   res.converged = ok;
   evaluator->setLoadFactor(lambda);  // the state written is the last converged one
@@ -658,7 +924,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     res.errorU = displacementError(*evaluator, scene.reference, u);
   }
   writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks);
-  res.wallTime = now() - t0;
+  res.wallTime = now() - t0 + elapsedBefore;
   // Peak resident memory: the largest rank's and the sum over ranks (MiB).
   double rss = 0, rssMax = 0, rssSum = 0;
   {
@@ -710,6 +976,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     j["converged"] = res.converged;
     if (!res.converged) j["failure"] = res.failure;
     j["wall_time_s"] = res.wallTime;
+    j["run_segments"] = segment;  // 1, or the runs a checkpointed run was split into
+    if (resume) j["resumed_from"] = {{"checkpoint", options.restartFrom}, {"step", resume->state.at("step")}};
     j["effects"] = evaluator->model().effectNames();
     j["linear_solver"] = scene.solver.linearSolverName;
     j["jacobian"] = scene.solver.jacobian;
@@ -723,28 +991,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     std::ostringstream csv;
     csv << std::setprecision(6) << std::scientific << "step,iteration,residual\n";
     for (const auto& s : res.steps) {
-      steps.push_back({{"step", s.step},
-                       {"load_factor", s.loadFactor},
-                       {"newton_iterations", s.newtonIterations},
-                       {"newton_iterations_all_attempts", s.newtonIterationsAll},
-                       {"linear_solves", s.linearSolves},
-                       {"krylov_iterations", s.krylovIterations},
-                       {"residuals", s.residuals},
-                       {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
-                       {"cutbacks", s.cutbacks},
-                       {"converged_at_roundoff_floor", s.atRoundoffFloor},
-                       {"roundoff_floor", s.floor},
-                       {"broken_bonds", s.brokenBonds},
-                       {"break_rounds", s.breakRounds},
-                       {"detached", s.detached},
-                       {"time_s", s.elapsed}});
-      if (arcLength) steps.back()["arc_length"] = s.arcLength;
-      if (s.negativePivots >= -1) steps.back()["negative_pivots"] = s.negativePivots;
-      if (scene.problem->damage) {
-        steps.back()["stall_broken_bonds"] = s.stallBrokenBonds;
-        steps.back()["reload_steps"] = s.reloadSteps;
-        if (s.stallBrokenBonds > 0) steps.back()["stall_max_stretch"] = s.stallStretch;
-      }
+      steps.push_back(stepJson(s, scene.problem->damage, arcLength));
       for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
     }
     j["steps"] = steps;

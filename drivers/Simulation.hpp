@@ -63,6 +63,14 @@ struct RunOptions {
   std::string outputDir = "out";
   bool quiet = false;       // no progress lines
   std::string plotScript;   // python script that draws PNGs from the output folder ("" = none)
+  // Checkpoints of load stepping (for runs longer than a job or a session): after a converged
+  // step, every checkpointSteps steps and/or once checkpointSeconds of wall time have passed
+  // since the last one, into checkpointDir (default: the output folder + ".checkpoint"). Each
+  // replaces the previous one only when complete.
+  int checkpointSteps = 0;
+  double checkpointSeconds = 0;
+  std::string checkpointDir;
+  std::string restartFrom;  // a checkpoint folder to resume from ("" = start at load factor 0)
 };
 
 /// Runs the scene on comm. Throws SceneError / std::invalid_argument for set-up problems

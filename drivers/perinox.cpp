@@ -23,8 +23,13 @@ namespace {
 int usage(int code) {
   (code == 0 ? std::cout : std::cerr)
       << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
+         "                  [--checkpoint-steps N] [--checkpoint-seconds S] [--checkpoint-dir DIR]\n"
+         "                  [--restart CHECKPOINT_DIR]\n"
          "       perinox schema     every scene key with its default and meaning\n"
          "       perinox --help\n"
+         "checkpoints (load stepping): after a converged step, every N steps and/or S seconds, into\n"
+         "DIR (default: the output folder + .checkpoint), each replacing the last when complete;\n"
+         "--restart resumes from one with the same scene and --set options, on any number of ranks\n"
          "exit codes: 0 converged; 2 invalid input (nothing written); 3 a step failed for good\n"
          "(last converged state written, reason in summary.json); 1 internal error\n";
   return code;
@@ -63,6 +68,29 @@ int main(int argc, char** argv) {
       opt.outputDir = args[++i];
     } else if (args[i] == "--quiet") {
       opt.quiet = true;
+    } else if ((args[i] == "--checkpoint-steps" || args[i] == "--checkpoint-seconds") && i + 1 < args.size()) {
+      const std::string flag = args[i], text = args[++i];
+      std::size_t used = 0;
+      double v = -1;
+      try {
+        v = std::stod(text, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      const bool steps = flag == "--checkpoint-steps";
+      if (used != text.size() || !(v > 0) || (steps && v != static_cast<int>(v))) {
+        if (root) std::cerr << "perinox: " << flag << " needs a positive " << (steps ? "whole number" : "number")
+                            << ", not '" << text << "'\n";
+        return 2;
+      }
+      if (steps)
+        opt.checkpointSteps = static_cast<int>(v);
+      else
+        opt.checkpointSeconds = v;
+    } else if (args[i] == "--checkpoint-dir" && i + 1 < args.size()) {
+      opt.checkpointDir = args[++i];
+    } else if (args[i] == "--restart" && i + 1 < args.size()) {
+      opt.restartFrom = args[++i];
     } else {
       if (root) std::cerr << "perinox: unknown argument '" << args[i] << "'\n";
       return root ? usage(2) : 2;

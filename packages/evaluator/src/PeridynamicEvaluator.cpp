@@ -692,6 +692,80 @@ PeridynamicEvaluator::BreakReport PeridynamicEvaluator::breakMostStretched(const
   return rep;
 }
 
+std::vector<std::pair<long long, long long>> PeridynamicEvaluator::ownedBrokenBonds() const {
+  // The model's owned families start as the discretisation's (Partition.cpp) and only lose bonds.
+  const auto& d = problem_->disc;
+  const LocalParticles& lp = model_->particles();
+  std::vector<std::pair<long long, long long>> out;
+  std::vector<long long> now;
+  for (int i = 0; i < lp.numOwned; ++i) {
+    const long long g = lp.globalId[i];
+    now.clear();
+    for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q) now.push_back(lp.globalId[lp.famIndex[q]]);
+    std::sort(now.begin(), now.end());
+    for (auto q = d.familyOffset[g]; q < d.familyOffset[g + 1]; ++q)
+      if (!std::binary_search(now.begin(), now.end(), d.familyIndex[q])) out.emplace_back(g, d.familyIndex[q]);
+  }
+  return out;
+}
+
+std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedFreeValues(const Thyra::VectorBase<double>& x) const {
+  auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
+  std::vector<std::pair<long long, double>> out;
+  out.reserve(xd.size());
+  for (LO l = 0; l < static_cast<LO>(xd.size()); ++l) out.emplace_back(ownedFree_->getGlobalElement(l), xd[l]);
+  return out;
+}
+
+long long PeridynamicEvaluator::setOwnedFreeValues(Thyra::VectorBase<double>& x,
+                                                   const std::vector<std::pair<long long, double>>& values) const {
+  auto tx = TOE::getTpetraVector(Teuchos::rcpFromRef(x));
+  auto xd = tx->getDataNonConst();
+  std::vector<char> seen(xd.size(), 0);
+  for (const auto& [gid, value] : values) {
+    const LO l = ownedFree_->getLocalElement(gid);
+    if (l == Teuchos::OrdinalTraits<LO>::invalid()) continue;
+    xd[l] = value;
+    seen[l] = 1;
+  }
+  return static_cast<long long>(std::count(seen.begin(), seen.end(), 0));
+}
+
+std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedFrozenDofs() const {
+  std::vector<std::pair<long long, double>> out;
+  for (const auto& [lid, value] : frozen_) out.emplace_back(ownedFree_->getGlobalElement(lid), value);
+  return out;
+}
+
+void PeridynamicEvaluator::restoreDamage(const std::vector<std::pair<long long, long long>>& broken,
+                                         const std::vector<long long>& detached,
+                                         const std::vector<std::pair<long long, double>>& frozen) {
+  reactionX_ = Teuchos::null;
+  std::vector<std::pair<long long, long long>> gone;
+  gone.reserve(broken.size());
+  for (auto [a, b] : broken) gone.emplace_back(std::min(a, b), std::max(a, b));
+  std::sort(gone.begin(), gone.end());
+  const LocalParticles& lp = model_->particles();
+  if (!gone.empty())
+    model_->removeBondsIf([&](int i, int j) {
+      const long long a = lp.globalId[i], b = lp.globalId[j];
+      return !std::binary_search(gone.begin(), gone.end(), std::make_pair(std::min(a, b), std::max(a, b)));
+    });
+  std::vector<long long> ids(detached);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  if (!ids.empty()) {
+    model_->isolate(ids);
+    model_->markDetached(ids);
+  }
+  detachedAll_ = ids;
+  frozen_.clear();
+  for (const auto& [gid, value] : frozen) {
+    const LO lid = ownedFree_->getLocalElement(gid);
+    if (lid != Teuchos::OrdinalTraits<LO>::invalid()) frozen_.emplace_back(lid, value);
+  }
+}
+
 void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep) {
   const int D = problem_->dim();
   const long long n = problem_->disc.size();

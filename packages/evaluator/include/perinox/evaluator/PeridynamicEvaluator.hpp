@@ -112,6 +112,21 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// tol of the largest one, if that one is in the softening band (s >= s_min; none otherwise),
   /// then detaches as breakBonds does. maxStretch receives the largest stretch.
   BreakReport breakMostStretched(const Thyra::VectorBase<double>& x, double tol, double& maxStretch);
+  // --- checkpoints (restart of long runs) ---
+  /// Bonds of the owned particles broken so far, as (owned particle, neighbour) global ids.
+  std::vector<std::pair<long long, long long>> ownedBrokenBonds() const;
+  /// The owned free DOFs of x as (global free DOF id, value).
+  std::vector<std::pair<long long, double>> ownedFreeValues(const Thyra::VectorBase<double>& x) const;
+  /// Sets the owned free DOFs of x from (global free DOF id, value) pairs (others are ignored);
+  /// returns the number of owned DOFs that found no value.
+  long long setOwnedFreeValues(Thyra::VectorBase<double>& x, const std::vector<std::pair<long long, double>>& values) const;
+  /// Frozen DOFs of the owned detached particles: (global free DOF id, frozen value).
+  std::vector<std::pair<long long, double>> ownedFrozenDofs() const;
+  /// Restores the damage of a checkpoint on a fresh evaluator (every rank, the same arguments):
+  /// removes the bonds (global id pairs, either order), detaches the particles and freezes their
+  /// owned DOFs at the given values (global free DOF id -> value).
+  void restoreDamage(const std::vector<std::pair<long long, long long>>& broken, const std::vector<long long>& detached,
+                     const std::vector<std::pair<long long, double>>& frozen);
   /// Damage index of the owned particles.
   std::vector<double> ownedDamage() const { return model_->damageIndex(); }
   const std::vector<long long>& detachedParticles() const { return detachedAll_; }
