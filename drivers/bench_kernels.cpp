@@ -148,11 +148,12 @@ int main(int argc, char** argv) {
         const Row r = timeModel(model, u, tangent, n > 200000 ? 3 : 5);
         const double bytesR = bonds * (4 + 24 + 8 + 8 * dim) + (8 + 24 + 8 + 8 * dim);
         const double bytesJ = bonds * (4 + 24 + 8 + 8 * dim + 24 * dim) + (8 + 24 + 8 + 8 * dim * 3);
-        // Memory: the assembled Jacobian as this project's evaluator stores it (an owned and an
-        // overlapping CRS copy: 8-byte value + 4-byte column index per entry), from the interior
-        // row length (an upper bound: boundary rows are shorter); the matrix-free solve keeps the
-        // model (positions, volumes, families), the 2-horizon-free neighbour preconditioner
-        // matrix (one CRS copy of (m+1) dim^2 entries per particle dim) and 40 Krylov vectors.
+        // Memory: the assembled Jacobian as this project's evaluator stored it until session 4
+        // (an owned and an overlapping CRS copy: 8-byte value + 4-byte column index per entry; it
+        // now keeps one copy plus the ghost rows), from the interior row length (an upper bound:
+        // boundary rows are shorter); the matrix-free solve keeps the model (positions, volumes,
+        // families), the neighbour preconditioner matrix (counted with two copies too, so the
+        // ratio is unchanged) and 40 Krylov vectors.
         const double rowJ = static_cast<double>(interiorCoupled(d)) * dim;
         const double bytesAssembled = 2.0 * n * dim * (rowJ * 12.0 + 8.0);
         const double bytesModel = n * (24 + 8 + 8 + (bonds * 4)) + n * dim * 8.0 * 4;

@@ -24,45 +24,85 @@ using MEB = Thyra::ModelEvaluatorBase;
 
 namespace {
 
-/// Sums element contributions into the rank's overlapping residual and matrix.
+/// Sums element contributions into the rank's overlapping residual and the Jacobian: rows of
+/// owned DOFs straight into the owned matrix's values, rows of ghost DOFs into the ghost-row
+/// matrix that is exported to their owners afterwards. For the owned rows, the element's columns
+/// are sorted by the owned matrix's column lids once per element and merged with each particle's
+/// sorted row; the rows of one particle's components share their column list (the graph gives
+/// every component of a particle the same columns), so the merge is done once per particle.
+/// Entries outside the graph (the neighbour graph) are dropped.
 class TpetraSink final : public ElementSink {
  public:
-  TpetraSink(int dim, double* r, const std::vector<int>& freeLid, TCrsMatrix* K)
-      : D_(dim), r_(r), freeLid_(freeLid), K_(K) {}
+  struct OwnedRows {
+    const size_t* rowPtr = nullptr;
+    const LO* cols = nullptr;
+    double* values = nullptr;
+    LO numRows = 0;                       // owned free DOFs: overlap lids below are owned rows
+    const std::vector<LO>* ovColToOwned = nullptr;
+  };
+  TpetraSink(int dim, double* r, const std::vector<int>& freeLid, const OwnedRows& owned, TCrsMatrix* ghost)
+      : D_(dim), r_(r), freeLid_(freeLid), owned_(owned), ghost_(ghost) {}
 
   void add(const int* parts, int n, const double* re, const double* Ke) override {
     const int nd = n * D_;
     for (int a = 0; a < n; ++a)
       for (int c = 0; c < D_; ++c) r_[parts[a] * D_ + c] += re[a * D_ + c];
-    if (!Ke || !K_) return;
+    if (!Ke || !owned_.values) return;
     cols_.clear();
     pos_.clear();
+    sorted_.clear();
     for (int b = 0; b < n; ++b)
       for (int e = 0; e < D_; ++e) {
         const int lid = freeLid_[parts[b] * D_ + e];
         if (lid >= 0) {
           cols_.push_back(lid);
           pos_.push_back(b * D_ + e);
+          const LO oc = (*owned_.ovColToOwned)[lid];
+          if (oc >= 0) sorted_.emplace_back(oc, b * D_ + e);
         }
       }
+    std::sort(sorted_.begin(), sorted_.end());
     vals_.resize(cols_.size());
-    for (int a = 0; a < n; ++a)
+    offsets_.resize(sorted_.size());
+    for (int a = 0; a < n; ++a) {
+      std::size_t mergedLength = static_cast<std::size_t>(-1);  // row length the offsets belong to
       for (int c = 0; c < D_; ++c) {
         const int row = freeLid_[parts[a] * D_ + c];
         if (row < 0) continue;
         const double* Krow = Ke + static_cast<std::size_t>(a * D_ + c) * nd;
-        for (std::size_t q = 0; q < cols_.size(); ++q) vals_[q] = Krow[pos_[q]];
-        K_->sumIntoLocalValues(row, static_cast<LO>(cols_.size()), vals_.data(), cols_.data());
+        if (row < owned_.numRows) {
+          const size_t begin = owned_.rowPtr[row], length = owned_.rowPtr[row + 1] - begin;
+          const LO* rc = owned_.cols + begin;
+          if (length != mergedLength) {  // merge the sorted element columns with the sorted row
+            size_t k = 0;
+            for (std::size_t q = 0; q < sorted_.size(); ++q) {
+              const LO col = sorted_[q].first;
+              while (k < length && rc[k] < col) ++k;
+              offsets_[q] = k < length && rc[k] == col ? static_cast<long>(k) : -1;
+            }
+            mergedLength = length;
+          }
+          double* v = owned_.values + begin;
+          for (std::size_t q = 0; q < sorted_.size(); ++q)
+            if (offsets_[q] >= 0) v[offsets_[q]] += Krow[sorted_[q].second];
+        } else if (ghost_) {
+          for (std::size_t q = 0; q < cols_.size(); ++q) vals_[q] = Krow[pos_[q]];
+          ghost_->sumIntoLocalValues(row - owned_.numRows, static_cast<LO>(cols_.size()), vals_.data(), cols_.data());
+        }
       }
+    }
   }
 
  private:
   int D_;
   double* r_;
   const std::vector<int>& freeLid_;
-  TCrsMatrix* K_;
+  OwnedRows owned_;
+  TCrsMatrix* ghost_;
   std::vector<LO> cols_;
   std::vector<int> pos_;
+  std::vector<std::pair<LO, int>> sorted_;  // (owned column lid, position in the element) by column
+  std::vector<long> offsets_;               // position of each sorted column in the current row
   std::vector<double> vals_;
 };
 
@@ -233,7 +273,6 @@ void PeridynamicEvaluator::buildMapsAndGraphs() {
   overlapAll_ = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(overlapAllG), 0, comm_));
   allImport_ = Teuchos::rcp(new Tpetra::Import<LO, GO>(ownedAll_, overlapAll_));
   allExport_ = Teuchos::rcp(new Tpetra::Export<LO, GO>(overlapAll_, ownedAll_));
-  freeExport_ = Teuchos::rcp(new Tpetra::Export<LO, GO>(overlapFree_, ownedFree_));
 
   // External force on owned free DOFs at load factor 1: f_ext = V b.
   fextOwnedFree_ = Teuchos::rcp(new TVector(ownedFree_));
@@ -272,9 +311,16 @@ PeridynamicEvaluator::Graphs PeridynamicEvaluator::buildGraphs(bool neighbours) 
       for (int b : parts)
         if (near(lp.X[a], lp.X[b])) adj[a].push_back(b);
   }
-  const size_t nOverlapFree = overlapFree_->getNodeNumElements();
-  std::vector<size_t> nnzOv(nOverlapFree, 0);
-  for (int l = 0; l < nLocal; ++l) {
+  // Ghost-row graph: the rows of the ghost particles' free DOFs (overlap lids from the owned
+  // count on), in the overlap's order; its column map is the overlap map.
+  const LO nOwnedFree = static_cast<LO>(ownedFree_->getNodeNumElements());
+  const LO nOverlapFree = static_cast<LO>(overlapFree_->getNodeNumElements());
+  std::vector<GO> ghostRows;
+  for (LO r = nOwnedFree; r < nOverlapFree; ++r) ghostRows.push_back(overlapFree_->getGlobalElement(r));
+  const auto invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+  auto ghostMap = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(ghostRows), 0, comm_));
+  std::vector<size_t> nnzGhost(ghostRows.size(), 0);
+  for (int l = lp.numOwned; l < nLocal; ++l) {
     auto& v = adj[l];
     std::sort(v.begin(), v.end());
     v.erase(std::unique(v.begin(), v.end()), v.end());
@@ -282,22 +328,26 @@ PeridynamicEvaluator::Graphs PeridynamicEvaluator::buildGraphs(bool neighbours) 
     for (int q : v)
       for (int c = 0; c < D; ++c) cnt += overlapFreeLid_[q * D + c] >= 0;
     for (int c = 0; c < D; ++c)
-      if (overlapFreeLid_[l * D + c] >= 0) nnzOv[overlapFreeLid_[l * D + c]] = cnt;
+      if (overlapFreeLid_[l * D + c] >= 0) nnzGhost[overlapFreeLid_[l * D + c] - nOwnedFree] = cnt;
   }
-  g.overlap = Teuchos::rcp(new TCrsGraph(overlapFree_, overlapFree_, Teuchos::ArrayView<const size_t>(nnzOv)));
+  g.ghost = Teuchos::rcp(new TCrsGraph(ghostMap, overlapFree_, Teuchos::ArrayView<const size_t>(nnzGhost)));
   std::vector<LO> cols;
-  for (int l = 0; l < nLocal; ++l) {
+  for (int l = lp.numOwned; l < nLocal; ++l) {
     cols.clear();
     for (int q : adj[l])
       for (int c = 0; c < D; ++c)
         if (overlapFreeLid_[q * D + c] >= 0) cols.push_back(overlapFreeLid_[q * D + c]);
     for (int c = 0; c < D; ++c)
       if (overlapFreeLid_[l * D + c] >= 0)
-        g.overlap->insertLocalIndices(overlapFreeLid_[l * D + c], Teuchos::ArrayView<const LO>(cols));
+        g.ghost->insertLocalIndices(overlapFreeLid_[l * D + c] - nOwnedFree, Teuchos::ArrayView<const LO>(cols));
   }
   adj.clear();
   adj.shrink_to_fit();
-  g.overlap->fillComplete(ownedFree_, ownedFree_);
+  g.ghost->fillComplete(ownedFree_, ownedFree_);
+  int mine = ghostRows.empty() ? 0 : 1, any = 0;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(any));
+  g.anyGhost = any != 0;
+  g.ghostExport = Teuchos::rcp(new Tpetra::Export<LO, GO>(ghostMap, ownedFree_));
 
   // Owned graph, computed from the replicated families: row particle p couples to every
   // particle of every element that contains p, i.e. of {i} u H_i for i in {p} u H_p (only
@@ -332,8 +382,16 @@ PeridynamicEvaluator::Graphs PeridynamicEvaluator::buildGraphs(bool neighbours) 
   for (size_t r = 0; r < rowCols.size(); ++r)
     g.owned->insertGlobalIndices(rows[r], Teuchos::ArrayView<const GO>(rowCols[r]));
   g.owned->fillComplete(ownedFree_, ownedFree_);
-  g.overlapMatrix = Teuchos::rcp(new TCrsMatrix(g.overlap));
-  g.overlapMatrix->fillComplete();
+  // The sink's binary search needs each row's column lids sorted (Tpetra sorts them when it
+  // fills a graph, but say so if a build ever does not).
+  if (!g.owned->isSorted()) throw std::logic_error("perinox: the Jacobian graph's rows are not sorted");
+  g.ovColToOwned.assign(nOverlapFree, -1);
+  for (LO c = 0; c < nOverlapFree; ++c) {
+    const LO k = g.owned->getColMap()->getLocalElement(overlapFree_->getGlobalElement(c));
+    if (k != Teuchos::OrdinalTraits<LO>::invalid()) g.ovColToOwned[c] = k;
+  }
+  g.ghostMatrix = Teuchos::rcp(new TCrsMatrix(g.ghost));
+  g.ghostMatrix->fillComplete(ownedFree_, ownedFree_);
   return g;
 }
 
@@ -442,8 +500,8 @@ std::size_t PeridynamicEvaluator::matrixBytes() const {
   for (const Graphs* g : {&full_, &nbr_}) {
     if (g->owned.is_null()) continue;
     // values (8 B) and local column indices (4 B) per entry, row offsets (8 B) per row, for the
-    // owned and the overlapping matrix (the graphs share their indices with the matrices).
-    for (const auto& gr : {g->owned, g->overlap})
+    // owned and the ghost-row matrix (the graphs share their indices with the matrices).
+    for (const auto& gr : {g->owned, g->ghost})
       b += gr->getNodeNumEntries() * (8 + 4) + (gr->getNodeNumRows() + 1) * 8;
   }
   return b;
@@ -494,12 +552,25 @@ std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::Vector
 Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBase<double>& x,
                                                            TCrsMatrix* W, bool neighbours) const {
   const std::vector<double> u = localDisplacements(x);
-  TCrsMatrix* overlapMatrix = W ? graphs(neighbours).overlapMatrix.get() : nullptr;
+  const Graphs* g = W ? &graphs(neighbours) : nullptr;
+  TCrsMatrix* ghost = g && g->anyGhost ? g->ghostMatrix.get() : nullptr;
   TVector rOv(overlapAll_);
   rOv.putScalar(0.0);
+  TpetraSink::OwnedRows rows;
+  typename TCrsMatrix::local_matrix_host_type local;
   if (W) {
-    overlapMatrix->resumeFill();
-    overlapMatrix->setAllToScalar(0.0);
+    W->resumeFill();
+    W->setAllToScalar(0.0);
+    local = W->getLocalMatrixHost();
+    rows.rowPtr = local.graph.row_map.data();
+    rows.cols = local.graph.entries.data();
+    rows.values = local.values.data();
+    rows.numRows = static_cast<LO>(ownedFree_->getNodeNumElements());
+    rows.ovColToOwned = &g->ovColToOwned;
+    if (ghost) {
+      ghost->resumeFill();
+      ghost->setAllToScalar(0.0);
+    }
   }
   // An EvaluationError on one rank must reach all ranks, or the others hang in the Export.
   int failed = 0;
@@ -507,7 +578,7 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
   long long particle = -1;
   {
     auto rd = rOv.getDataNonConst();
-    TpetraSink sink(problem_->dim(), rd.getRawPtr(), overlapFreeLid_, overlapMatrix);
+    TpetraSink sink(problem_->dim(), rd.getRawPtr(), overlapFreeLid_, rows, ghost);
     try {
       model_->evaluate(u, sink, W != nullptr);
     } catch (const EvaluationError& e) {
@@ -516,14 +587,12 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
       particle = e.particle();
     }
   }
-  if (W) overlapMatrix->fillComplete();
+  if (ghost) ghost->fillComplete(ownedFree_, ownedFree_);
   synchroniseFailure(failed, message, particle);
   auto r = Teuchos::rcp(new TVector(ownedAll_));
   r->doExport(rOv, *allExport_, Tpetra::ADD);
   if (W) {
-    W->resumeFill();
-    W->setAllToScalar(0.0);
-    W->doExport(*overlapMatrix, *freeExport_, Tpetra::ADD);
+    if (ghost) W->doExport(*ghost, *g->ghostExport, Tpetra::ADD);
     for (const auto& [lid, value] : frozen_) {
       (void)value;
       const LO col = W->getColMap()->getLocalElement(ownedFree_->getGlobalElement(lid));

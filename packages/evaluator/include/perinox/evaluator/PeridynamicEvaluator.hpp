@@ -162,10 +162,16 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   double fdLambda_ = 1e-6;
 
   struct Graphs {
-    Teuchos::RCP<TCrsGraph> owned, overlap;
-    Teuchos::RCP<TCrsMatrix> overlapMatrix;
+    Teuchos::RCP<TCrsGraph> owned;   // the Jacobian's graph (owned rows)
+    // Rows of ghost particles' DOFs (their owners sum them in by an Export); columns are the
+    // overlap lids. Owned rows are summed straight into the owned matrix's values.
+    Teuchos::RCP<TCrsGraph> ghost;
+    Teuchos::RCP<TCrsMatrix> ghostMatrix;
+    Teuchos::RCP<Tpetra::Export<LO, GO>> ghostExport;
+    bool anyGhost = false;           // on any rank (not on one rank)
+    std::vector<LO> ovColToOwned;    // overlap free lid -> column lid of the owned matrix (-1: none)
   };
-  /// The owned and overlapping graphs (every element couples all its particles, or only those
+  /// The owned and ghost-row graphs (every element couples all its particles, or only those
   /// within one horizon of each other), built on first use.
   const Graphs& graphs(bool neighbours) const;
   Graphs buildGraphs(bool neighbours) const;
@@ -193,7 +199,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   Teuchos::RCP<const TMap> ownedFree_, overlapFree_, ownedAll_, overlapAll_;
   Teuchos::RCP<Tpetra::Import<LO, GO>> allImport_;
-  Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_, freeExport_;
+  Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_;
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
   double fextNorm_ = 0.0;                 // its global 2-norm (the load never changes)
   // Detached particles: their free DOFs are frozen, f = k (x - x_frozen), W_ii = k.
