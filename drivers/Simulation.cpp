@@ -226,7 +226,26 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
   }
   if (c.state.value("format", 0) != 1 || !c.state.contains("scene") || !c.state.contains("ranks"))
     throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 1)");
-  const std::string mine = resolvedSceneText(scene), theirs = c.state["scene"].get<std::string>();
+  // Run controls may change between the segments of a run (limits that stopped it, the linear
+  // solver, NOX's verbosity, the output options); everything else must be the checkpoint's.
+  auto physics = [&](const std::string& xml) {
+    Teuchos::RCP<Teuchos::ParameterList> pl;
+    try {
+      pl = Teuchos::getParametersFromXmlString(xml);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(where + ": its scene is not readable XML (" + e.what() + ")");
+    }
+    if (pl->isSublist("Solver")) {
+      auto& so = pl->sublist("Solver");
+      for (const char* k : {"Max Total Steps", "Linear Solver Preset", "Linear Solver", "Verbosity"}) so.remove(k, false);
+    }
+    if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
+    pl->remove("Output", false);
+    std::ostringstream o;
+    Teuchos::writeParameterListToXmlOStream(*pl, o);
+    return o.str();
+  };
+  const std::string mine = physics(resolvedSceneText(scene)), theirs = physics(c.state["scene"].get<std::string>());
   if (mine != theirs) {
     std::istringstream a(mine), b(theirs);
     std::string la, lb;
@@ -240,8 +259,9 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
       t.erase(0, t.find_first_not_of(" \t"));
       return t;
     };
-    throw std::invalid_argument(where + " was written for another scene (the same scene file and the same --set "
-                                "options are needed); resolved scene line " + std::to_string(line) + ": now '" +
+    throw std::invalid_argument(where + " was written for another scene (the same scene and --set options are "
+                                "needed, except run controls: Solver/Max Total Steps, Linear Solver Preset, "
+                                "Linear Solver, Verbosity, Damage/Max Stall Breaks, Output); resolved scene line " + std::to_string(line) + ": now '" +
                                 trim(la) + "', in the checkpoint '" + trim(lb) + "'");
   }
   const int ranks = c.state["ranks"];
