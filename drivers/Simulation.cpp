@@ -135,6 +135,7 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
   if (damage) {
     j["stall_broken_bonds"] = s.stallBrokenBonds;
     j["reload_steps"] = s.reloadSteps;
+    j["fragment_particles"] = s.fragmentParticles;
     if (s.stallBrokenBonds > 0) j["stall_max_stretch"] = s.stallStretch;
   }
   return j;
@@ -161,6 +162,7 @@ StepRecord stepFromJson(const nlohmann::json& j) {
   s.negativePivots = j.value("negative_pivots", -2);
   s.stallBrokenBonds = j.value("stall_broken_bonds", 0LL);
   s.reloadSteps = j.value("reload_steps", 0);
+  s.fragmentParticles = j.value("fragment_particles", 0LL);
   s.stallStretch = j.value("stall_max_stretch", 0.0);
   return s;
 }
@@ -786,6 +788,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         rec.stallStretch = smax;
         rec.brokenBonds += rep.brokenBonds;
         rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        rec.fragmentParticles += rep.fragmentParticles;
         if (rank == 0 && !options.quiet)
           std::cout << "  step " << step << ": " << nr.failure << "\n  stall at load factor " << lambda << ": broke "
                     << rep.brokenBonds << " bond(s) at the largest stretch " << smax << " (softening band ["
@@ -829,6 +832,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         const auto rep = evaluator->breakBonds(*x);
         rec.brokenBonds += rep.brokenBonds;
         rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        rec.fragmentParticles += rep.fragmentParticles;
         if (rep.brokenBonds == 0 && rep.detached.empty()) break;
         if (rec.breakRounds >= scene.maxBreakRounds) {
           nr.converged = false;
@@ -858,7 +862,11 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       res.steps.back() = rec;
       if (rank == 0 && !options.quiet && (rec.brokenBonds > 0 || !rec.detached.empty()))
         std::cout << "    damage: " << rec.brokenBonds << " bond(s) broken, " << rec.breakRounds
-                  << " re-equilibration(s), " << rec.detached.size() << " particle(s) detached\n";
+                  << " re-equilibration(s), " << rec.detached.size() << " particle(s) detached"
+                  << (rec.fragmentParticles > 0 ? " (" + std::to_string(rec.fragmentParticles) +
+                                                      " in free-floating fragments: frozen where they broke off)"
+                                                : std::string())
+                  << "\n";
     }
     if (scene.solver.stabilityCheck) {
       const int neg = evaluator->negativePivots(*x);
@@ -1041,6 +1049,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       j["stall_broken_bonds_total"] = stallTotal;
       j["stall_breaks"] = stallSteps;
       j["detached_particles"] = evaluator->detachedParticles();
+      long long fragments = 0;
+      for (const auto& s : res.steps) fragments += s.fragmentParticles;
+      j["fragment_particles_total"] = fragments;  // of the detached: cut off from every prescribed DOF
     }
     json probes = json::object();
     for (std::size_t k = 0; k < res.probes.size(); ++k) {

@@ -28,6 +28,7 @@ struct StepRecord {
   long long brokenBonds = 0;       // damage: bonds broken after this step converged
   int breakRounds = 0;             // damage: re-equilibrations after breaking
   std::vector<long long> detached; // particles detached in this step
+  long long fragmentParticles = 0; // of those, particles of free-floating fragments
   long long stallBrokenBonds = 0;  // damage, On Stall = Break Most Stretched: bonds broken because
                                    // the step could not be converged (included in brokenBonds)
   double stallStretch = 0;         // the largest stretch at that break

@@ -9,6 +9,10 @@
   displacement (its DOFs are frozen, never NaN), and no field in fields.csv is NaN;
 - every particle listed as detached has phi = 1 (a particle with bonds left is never detached);
 - with several folders (e.g. 1 and 2 MPI ranks): the same detached particles and broken bonds.
+- --fragments N: exactly N particles were reported as free-floating fragments, and --max-drift D:
+  the mean u_y of the real particles, zero by the strip's symmetry about its axis, is at most D:
+  a fragment left free drifts along its rigid-body mode instead (measured 0.094 mm before
+  fragments were detected).
 """
 import argparse
 import csv
@@ -40,6 +44,8 @@ def load(d):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--detached", action="append", default=[], help="X,Y of a particle that must be detached")
+    ap.add_argument("--fragments", type=int, help="particles reported in free-floating fragments")
+    ap.add_argument("--max-drift", type=float, help="largest |mean u_y| of the real particles")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     s, rows = load(a.dirs[0])
@@ -62,6 +68,14 @@ def main():
         for pid in hits:
             if pid not in det:
                 fail(f"particle {pid} at ({x}, {y}) is not detached (phi = {rows[pid][4]})")
+    if a.fragments is not None and s.get("fragment_particles_total") != a.fragments:
+        fail(f"{s.get('fragment_particles_total')} particles reported in free-floating fragments, expected {a.fragments}")
+    if a.max_drift is not None:
+        uy = [r[3] for r in rows.values() if not r[5]]
+        drift = abs(sum(uy) / len(uy))
+        print(f"mean u_y of the real particles: {drift:.3e} (allowed {a.max_drift})")
+        if drift > a.max_drift:
+            fail("a real particle drifted across the load (a free fragment moving along a rigid-body mode?)")
     real = sorted(pid for pid in det if not rows[pid][5])
     print(f"{len(det)} detached particles ({len(real)} real: "
           + ", ".join(f"({rows[p][0]}, {rows[p][1]})" for p in real) + f"), {s['broken_bonds_total']} bonds broken")

@@ -839,15 +839,8 @@ void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, Br
   const int D = problem_->dim();
   const long long n = problem_->disc.size();
   auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
-  for (int round = 0; round < 1000; ++round) {
-    // Flags of every particle that became singular on any rank (rare: after damage only).
-    std::vector<int> mine(n, 0), all(n, 0);
-    for (long long g : model_->singularParticles()) mine[g] = 1;
-    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
-    std::vector<long long> ids;
-    for (long long g = 0; g < n; ++g)
-      if (all[g]) ids.push_back(g);
-    if (ids.empty()) break;
+  // Isolates, marks detached and freezes (at x) the given particles (global ids, all ranks).
+  auto detach = [&](const std::vector<long long>& ids) {
     model_->isolate(ids);
     model_->markDetached(ids);
     for (long long g : ids) {
@@ -860,8 +853,80 @@ void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, Br
         if (lid >= 0) frozen_.emplace_back(lid, xd[lid]);
       }
     }
+  };
+  for (int round = 0; round < 1000; ++round) {
+    // Flags of every particle that became singular on any rank (rare: after damage only).
+    std::vector<int> mine(n, 0), all(n, 0);
+    for (long long g : model_->singularParticles()) mine[g] = 1;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
+    std::vector<long long> ids;
+    for (long long g = 0; g < n; ++g)
+      if (all[g]) ids.push_back(g);
+    if (ids.empty()) break;
+    detach(ids);
+  }
+  // Free-floating fragments: pieces the broken bonds have cut off from every prescribed DOF. Their
+  // rigid-body motion makes the tangent singular and, unloaded, any position of theirs is an
+  // equilibrium: a solver would either fail or let them drift (measured on the detaching strip:
+  // its freed middle moved 0.094 mm sideways). They are removed like detached particles, frozen
+  // where the last converged state left them, and reported.
+  if (rep.brokenBonds > 0 || !rep.detached.empty()) {
+    const auto frag = unanchoredParticles();
+    if (!frag.empty()) {
+      detach(frag);
+      rep.fragmentParticles += static_cast<long long>(frag.size());
+    }
   }
   std::sort(detachedAll_.begin(), detachedAll_.end());
+}
+
+std::vector<long long> PeridynamicEvaluator::unanchoredParticles() const {
+  const ProblemSpec& P = *problem_;
+  const int D = P.dim();
+  const long long n = P.disc.size();
+  const LocalParticles& lp = model_->particles();
+  // anchored[l]: particle l (owned or ghost) reaches a prescribed DOF through intact bonds. Spread
+  // over the owned families to a fixed point on each rank, then to the ghosts by an Import, until
+  // no rank anchors another particle.
+  std::vector<char> anchored(lp.size(), 0);
+  for (int l = 0; l < lp.numOwned; ++l) anchored[l] = P.fixedMask[lp.globalId[l]] != 0;
+  TVector owned(ownedAll_), ghosted(overlapAll_);
+  long long before = -1;
+  for (;;) {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (int i = 0; i < lp.numOwned; ++i) {
+        if (anchored[i]) continue;
+        for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q)
+          if (anchored[lp.famIndex[q]]) {
+            anchored[i] = 1;
+            changed = true;
+            break;
+          }
+      }
+    }
+    long long mine = 0, total = 0;
+    for (int i = 0; i < lp.numOwned; ++i) mine += anchored[i];
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(total));
+    if (total == before) break;
+    before = total;
+    {
+      auto od = owned.getDataNonConst();
+      for (int i = 0; i < lp.numOwned; ++i)
+        for (int c = 0; c < D; ++c) od[i * D + c] = anchored[i];
+    }
+    ghosted.doImport(owned, *allImport_, Tpetra::INSERT);
+    auto gd = ghosted.getData();
+    for (int l = lp.numOwned; l < lp.size(); ++l) anchored[l] = anchored[l] || gd[l * D] > 0.5;
+  }
+  std::vector<int> mine(n, 0), all(n, 0);
+  for (int i = 0; i < lp.numOwned; ++i)
+    if (!anchored[i] && !model_->detached(i)) mine[lp.globalId[i]] = 1;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
+  std::vector<long long> ids;
+  for (long long g = 0; g < n; ++g)
+    if (all[g]) ids.push_back(g);
+  return ids;
 }
 
 Eigen::Matrix3d PeridynamicEvaluator::rotationMatrix() const {

@@ -103,9 +103,11 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   struct BreakReport {
     long long brokenBonds = 0;             // bonds broken now (global)
     std::vector<long long> detached;       // particles detached now (global ids, all ranks)
+    long long fragmentParticles = 0;       // of those, in free-floating fragments
   };
   /// After a converged step: breaks every bond with s >= s_cr at x, then detaches (isolates
-  /// and freezes) every particle left with a singular shape tensor, repeating until none is.
+  /// and freezes) every particle left with a singular shape tensor, repeating until none is,
+  /// and every particle of a free-floating fragment (cut off from all prescribed DOFs).
   BreakReport breakBonds(const Thyra::VectorBase<double>& x);
   /// For a load step that cannot be converged (a snap-back of softening bonds under displacement
   /// control): breaks, at the converged state x, the intact bonds whose stretch is within
@@ -143,6 +145,9 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
 
  private:
   void detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep);
+  /// Attached particles (global ids, all ranks) that no chain of intact bonds connects to a
+  /// particle with a prescribed DOF: free-floating fragments.
+  std::vector<long long> unanchoredParticles() const;
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
   void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
                      const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;
