@@ -266,6 +266,19 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
                                 "Linear Solver, Verbosity, Damage/Max Stall Breaks, Output); resolved scene line " + std::to_string(line) + ": now '" +
                                 trim(la) + "', in the checkpoint '" + trim(lb) + "'");
   }
+  // Everything the loop will read, checked now, before any output exists.
+  try {
+    for (const char* k : {"step", "lambda", "increment", "last_increment", "stall_breaks", "elapsed_s", "segment"})
+      (void)c.state.at(k).get<double>();
+    for (const auto& sj : c.state.at("steps")) (void)stepFromJson(sj);
+    (void)c.state.at("path_load_factors").get<std::vector<double>>();
+    (void)c.state.at("detached").get<std::vector<long long>>();
+    const auto& probes = c.state.at("probes");
+    if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
+    for (const auto& p : probes) (void)p.get<std::vector<std::pair<double, std::vector<double>>>>();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(where + ": state.json is incomplete or damaged (" + e.what() + ")");
+  }
   const int ranks = c.state["ranks"];
   for (int r = 0; r < ranks; ++r) {
     const std::string f = dir + "/rank_" + std::to_string(r) + ".txt";
