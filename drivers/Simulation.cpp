@@ -1037,34 +1037,30 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
     j["steps"] = steps;
     {
-      long long newtonAll = 0, solves = 0, krylov = 0;
+      // The run's totals, one pass over the steps: the whole work (Newton iterations of every
+      // attempt, ADR's iterations for ADR; linear solves; Krylov iterations, 0 with a direct
+      // solver) and, with damage, the bonds broken, the stall events and the fragment particles.
+      long long newtonAll = 0, solves = 0, krylov = 0, broken = 0, stallBonds = 0, fragments = 0;
+      int stallSteps = 0;
       for (const auto& s : res.steps) {
         newtonAll += s.newtonIterationsAll;
         solves += s.linearSolves;
         krylov += s.krylovIterations;
+        broken += s.brokenBonds;
+        stallBonds += s.stallBrokenBonds;
+        stallSteps += s.stallBrokenBonds > 0;
+        fragments += s.fragmentParticles;
       }
-      // The run's whole work: Newton iterations of every attempt (ADR: its iterations), linear
-      // solves, and Krylov iterations (0 with a direct solver).
       j["newton_iterations_total"] = newtonAll;
       j["linear_solves_total"] = solves;
       j["krylov_iterations_total"] = krylov;
-    }
-    if (scene.problem->damage) {
-      long long total = 0;
-      for (const auto& s : res.steps) total += s.brokenBonds;
-      j["broken_bonds_total"] = total;
-      long long stallTotal = 0;
-      int stallSteps = 0;
-      for (const auto& s : res.steps) {
-        stallTotal += s.stallBrokenBonds;
-        stallSteps += s.stallBrokenBonds > 0;
+      if (scene.problem->damage) {
+        j["broken_bonds_total"] = broken;
+        j["stall_broken_bonds_total"] = stallBonds;
+        j["stall_breaks"] = stallSteps;
+        j["detached_particles"] = evaluator->detachedParticles();
+        j["fragment_particles_total"] = fragments;  // of the detached: cut off from every prescribed DOF
       }
-      j["stall_broken_bonds_total"] = stallTotal;
-      j["stall_breaks"] = stallSteps;
-      j["detached_particles"] = evaluator->detachedParticles();
-      long long fragments = 0;
-      for (const auto& s : res.steps) fragments += s.fragmentParticles;
-      j["fragment_particles_total"] = fragments;  // of the detached: cut off from every prescribed DOF
     }
     json probes = json::object();
     for (std::size_t k = 0; k < res.probes.size(); ++k) {
