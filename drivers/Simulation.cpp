@@ -285,6 +285,13 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
     std::ifstream in(f);
     if (!in) throw std::invalid_argument(where + ": " + f + " is missing");
     std::string line, kind;
+    // A number as written (hexadecimal floating point), finite, with nothing after it.
+    auto number = [&](const std::string& t, bool& ok) {
+      char* end = nullptr;
+      const double v = std::strtod(t.c_str(), &end);
+      ok = ok && end && *end == '\0' && end != t.c_str() && std::isfinite(v);
+      return v;
+    };
     while (std::getline(in, line)) {
       std::istringstream ls(line);
       ls >> kind;
@@ -294,15 +301,15 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
       if (kind == "x") {
         ok = static_cast<bool>(ls >> g >> v1 >> v2);
         if (ok) {
-          c.x.emplace_back(g, std::strtod(v1.c_str(), nullptr));
-          c.xPrevious.emplace_back(g, std::strtod(v2.c_str(), nullptr));
+          c.x.emplace_back(g, number(v1, ok));
+          c.xPrevious.emplace_back(g, number(v2, ok));
         }
       } else if (kind == "bond") {
         ok = static_cast<bool>(ls >> g >> h);
         if (ok) c.broken.emplace_back(g, h);
       } else if (kind == "frozen") {
         ok = static_cast<bool>(ls >> g >> v1);
-        if (ok) c.frozen.emplace_back(g, std::strtod(v1.c_str(), nullptr));
+        if (ok) c.frozen.emplace_back(g, number(v1, ok));
       } else {
         ok = false;
       }

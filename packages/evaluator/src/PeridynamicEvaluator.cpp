@@ -39,6 +39,7 @@ class TpetraSink final : public ElementSink {
     double* values = nullptr;
     LO numRows = 0;                       // owned free DOFs: overlap lids below are owned rows
     const std::vector<LO>* ovColToOwned = nullptr;
+    bool active = false;                  // a Jacobian is wanted (a rank may own no entries)
   };
   TpetraSink(int dim, double* r, const std::vector<int>& freeLid, const OwnedRows& owned, TCrsMatrix* ghost)
       : D_(dim), r_(r), freeLid_(freeLid), owned_(owned), ghost_(ghost) {}
@@ -47,7 +48,7 @@ class TpetraSink final : public ElementSink {
     const int nd = n * D_;
     for (int a = 0; a < n; ++a)
       for (int c = 0; c < D_; ++c) r_[parts[a] * D_ + c] += re[a * D_ + c];
-    if (!Ke || !owned_.values) return;
+    if (!Ke || !owned_.active) return;
     cols_.clear();
     pos_.clear();
     sorted_.clear();
@@ -567,6 +568,7 @@ Teuchos::RCP<TVector> PeridynamicEvaluator::internalForce(const Thyra::VectorBas
     rows.values = local.values.data();
     rows.numRows = static_cast<LO>(ownedFree_->getNodeNumElements());
     rows.ovColToOwned = &g->ovColToOwned;
+    rows.active = true;
     if (ghost) {
       ghost->resumeFill();
       ghost->setAllToScalar(0.0);
