@@ -379,6 +379,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     ++step;
     const double tStep = now();
     const LinearSolveCounts before = als.totalLinear();
+    const long long correctorsBefore = als.totalCorrectorIterations();
     StepRecord rec;
     rec.step = step;
     ArcLengthResult r;
@@ -457,8 +458,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     rec.newtonIterations = r.iterations;
     rec.linearSolves = als.totalLinear().solves - before.solves;
     rec.krylovIterations = als.totalLinear().krylovIterations - before.krylovIterations;
-    // Every corrector iteration solves two systems (J a = -f, J b = df/dlambda).
-    rec.newtonIterationsAll = rec.linearSolves / 2;
+    rec.newtonIterationsAll = als.totalCorrectorIterations() - correctorsBefore;
     rec.residuals = r.residuals;
     rec.reactionNormalised = r.reactionNormalised;
     rec.atRoundoffFloor = r.atRoundoffFloor;

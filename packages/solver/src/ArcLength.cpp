@@ -150,6 +150,7 @@ ArcLengthResult ArcLengthSolver::correct(Vec& x, double& lambda, const Vec& tx, 
         break;
       }
       // Bordering: J a = -f, J b = df/dlambda.
+      ++correctorIterations_;
       loadDerivative(x, lambda, *fl);
       auto lows = Thyra::linearOpWithSolve(*ev_->get_W_factory(), W.getConst());
       Thyra::scale(-1.0, f.ptr());

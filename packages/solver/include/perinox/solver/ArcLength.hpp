@@ -62,9 +62,12 @@ class ArcLengthSolver {
 
   /// Linear solves (tangent and bordering) and their Krylov iterations over every call so far.
   const LinearSolveCounts& totalLinear() const { return counts_; }
+  /// Corrector iterations (bordering steps begun) over every call so far, failed attempts included.
+  long long totalCorrectorIterations() const { return correctorIterations_; }
 
  private:
   mutable LinearSolveCounts counts_;
+  mutable long long correctorIterations_ = 0;
   Teuchos::RCP<PeridynamicEvaluator> ev_;
   ArcLengthOptions opt_;
   bool deadLoad_ = true;
