@@ -152,8 +152,8 @@ int main(int argc, char** argv) {
         // (an owned and an overlapping CRS copy: 8-byte value + 4-byte column index per entry; it
         // now keeps one copy plus the ghost rows), from the interior row length (an upper bound:
         // boundary rows are shorter); the matrix-free solve keeps the model (positions, volumes,
-        // families), the neighbour preconditioner matrix (counted with two copies too, so the
-        // ratio is unchanged) and 40 Krylov vectors.
+        // families), the neighbour preconditioner matrix (counted with two copies too, as it was
+        // stored until then) and 40 Krylov vectors. docs/performance.md says what this overstates.
         const double rowJ = static_cast<double>(interiorCoupled(d)) * dim;
         const double bytesAssembled = 2.0 * n * dim * (rowJ * 12.0 + 8.0);
         const double bytesModel = n * (24 + 8 + 8 + (bonds * 4)) + n * dim * 8.0 * 4;
