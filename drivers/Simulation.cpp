@@ -208,9 +208,13 @@ void writeCheckpoint(const std::string& dir, const nlohmann::json& state, const 
     nlohmann::json st = state;
     st["ranks"] = comm.getSize();
     writeFileAtomic(tmp + "/state.json", st.dump(1) + "\n");
-    // Replace the previous checkpoint only once the new one is complete.
-    fs::remove_all(dir);
+    // Replace the previous checkpoint only once the new one is complete; the old one is moved
+    // aside first, so a job killed in between leaves DIR.old or DIR, never neither.
+    const std::string old = dir + ".old";
+    fs::remove_all(old);
+    if (fs::exists(dir)) fs::rename(dir, old);
     fs::rename(tmp, dir);
+    fs::remove_all(old);
   }
   comm.barrier();
 }
@@ -220,7 +224,10 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
   Checkpoint c;
   const std::string where = "checkpoint '" + dir + "'";
   std::ifstream sj(dir + "/state.json");
-  if (!sj) throw std::invalid_argument(where + ": no state.json there (not a checkpoint, or one still being written)");
+  if (!sj)
+    throw std::invalid_argument(where + ": no state.json there (not a checkpoint" +
+                                (fs::exists(dir + ".old/state.json") ? std::string(": the job was killed while replacing it; the previous one is '") + dir + ".old'" : std::string()) +
+                                ")");
   try {
     c.state = nlohmann::json::parse(sj);
   } catch (const std::exception& e) {
