@@ -219,8 +219,9 @@ void writeCheckpoint(const std::string& dir, const nlohmann::json& state, const 
   comm.barrier();
 }
 
-/// Reads a checkpoint written for this scene; throws std::invalid_argument naming the problem.
-Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
+/// Reads a checkpoint written for this scene (freeDofs unknowns); throws std::invalid_argument
+/// naming the problem.
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs) {
   Checkpoint c;
   const std::string where = "checkpoint '" + dir + "'";
   std::ifstream sj(dir + "/state.json");
@@ -323,6 +324,15 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene) {
       if (!ok) throw std::invalid_argument(where + ": unreadable line in " + f + ": '" + line + "'");
     }
   }
+  std::vector<long long> ids;
+  for (const auto& e : c.x) ids.push_back(e.first);
+  std::sort(ids.begin(), ids.end());
+  const bool complete = static_cast<long long>(ids.size()) == freeDofs &&
+                        std::adjacent_find(ids.begin(), ids.end()) == ids.end() &&
+                        (ids.empty() || (ids.front() == 0 && ids.back() == freeDofs - 1));
+  if (!complete)
+    throw std::invalid_argument(where + " holds " + std::to_string(ids.size()) + " displacement values for " +
+                                std::to_string(freeDofs) + " free DOFs (damaged or from another discretisation)");
   return c;
 }
 
@@ -549,19 +559,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
                                 "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
   std::optional<Checkpoint> resume;
-  if (!options.restartFrom.empty()) {
-    resume = readCheckpoint(options.restartFrom, scene);
-    std::vector<long long> ids;
-    for (const auto& e : resume->x) ids.push_back(e.first);
-    std::sort(ids.begin(), ids.end());
-    const bool complete = static_cast<long long>(ids.size()) == res.dofs &&
-                          std::adjacent_find(ids.begin(), ids.end()) == ids.end() &&
-                          (ids.empty() || (ids.front() == 0 && ids.back() == res.dofs - 1));
-    if (!complete)
-      throw std::invalid_argument("checkpoint '" + options.restartFrom + "' holds " + std::to_string(ids.size()) +
-                                  " displacement values for " + std::to_string(res.dofs) +
-                                  " free DOFs (damaged or from another discretisation)");
-  }
+  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs);
 
   const std::string staging = options.outputDir + ".partial";
   if (rank == 0) {
@@ -594,9 +592,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   // moves the body with the load first: x = x_0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda,
   // one linear solve at the unloaded state. Pure dead loads do not need it (it equals Newton's
   // first iteration there).
-  bool prescribedMotion = scene.problem->rotates();
-  for (double v : scene.problem->prescribed)
-    if (v != 0.0) prescribedMotion = true;
+  const bool prescribedMotion = scene.problem->rotates() || scene.problem->prescribesDisplacement();
   Teuchos::RCP<Thyra::VectorBase<double>> firstTangent;
   LinearSolveCounts tangentCounts;
 

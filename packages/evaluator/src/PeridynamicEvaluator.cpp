@@ -788,18 +788,13 @@ std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedFreeValues(
   return out;
 }
 
-long long PeridynamicEvaluator::setOwnedFreeValues(Thyra::VectorBase<double>& x,
-                                                   const std::vector<std::pair<long long, double>>& values) const {
-  auto tx = TOE::getTpetraVector(Teuchos::rcpFromRef(x));
-  auto xd = tx->getDataNonConst();
-  std::vector<char> seen(xd.size(), 0);
+void PeridynamicEvaluator::setOwnedFreeValues(Thyra::VectorBase<double>& x,
+                                              const std::vector<std::pair<long long, double>>& values) const {
+  auto xd = TOE::getTpetraVector(Teuchos::rcpFromRef(x))->getDataNonConst();
   for (const auto& [gid, value] : values) {
     const LO l = ownedFree_->getLocalElement(gid);
-    if (l == Teuchos::OrdinalTraits<LO>::invalid()) continue;
-    xd[l] = value;
-    seen[l] = 1;
+    if (l != Teuchos::OrdinalTraits<LO>::invalid()) xd[l] = value;
   }
-  return static_cast<long long>(std::count(seen.begin(), seen.end(), 0));
 }
 
 std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedFrozenDofs() const {
@@ -839,7 +834,6 @@ void PeridynamicEvaluator::restoreDamage(const std::vector<std::pair<long long, 
 
 void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep) {
   const int D = problem_->dim();
-  const long long n = problem_->disc.size();
   auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
   // Isolates, marks detached and freezes (at x) the given particles (global ids, all ranks).
   auto detach = [&](const std::vector<long long>& ids) {
@@ -857,13 +851,8 @@ void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, Br
     }
   };
   for (int round = 0; round < 1000; ++round) {
-    // Flags of every particle that became singular on any rank (rare: after damage only).
-    std::vector<int> mine(n, 0), all(n, 0);
-    for (long long g : model_->singularParticles()) mine[g] = 1;
-    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
-    std::vector<long long> ids;
-    for (long long g = 0; g < n; ++g)
-      if (all[g]) ids.push_back(g);
+    // Every particle that became singular on any rank (rare: after damage only).
+    const auto ids = onAnyRank(model_->singularParticles());
     if (ids.empty()) break;
     detach(ids);
   }
@@ -885,7 +874,6 @@ void PeridynamicEvaluator::detachSingular(const Thyra::VectorBase<double>& x, Br
 std::vector<long long> PeridynamicEvaluator::unanchoredParticles() const {
   const ProblemSpec& P = *problem_;
   const int D = P.dim();
-  const long long n = P.disc.size();
   const LocalParticles& lp = model_->particles();
   // anchored[l]: particle l (owned or ghost) reaches a prescribed DOF through intact bonds. Spread
   // over the owned families to a fixed point on each rank, then to the ghosts by an Import, until
@@ -921,10 +909,17 @@ std::vector<long long> PeridynamicEvaluator::unanchoredParticles() const {
     auto gd = ghosted.getData();
     for (int l = lp.numOwned; l < lp.size(); ++l) anchored[l] = anchored[l] || gd[l * D] > 0.5;
   }
-  std::vector<int> mine(n, 0), all(n, 0);
+  std::vector<long long> loose;
   for (int i = 0; i < lp.numOwned; ++i)
-    if (!anchored[i] && !model_->detached(i)) mine[lp.globalId[i]] = 1;
-  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), mine.data(), all.data());
+    if (!anchored[i] && !model_->detached(i)) loose.push_back(lp.globalId[i]);
+  return onAnyRank(loose);
+}
+
+std::vector<long long> PeridynamicEvaluator::onAnyRank(const std::vector<long long>& mine) const {
+  const long long n = problem_->disc.size();
+  std::vector<int> flag(n, 0), all(n, 0);
+  for (long long g : mine) flag[g] = 1;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), flag.data(), all.data());
   std::vector<long long> ids;
   for (long long g = 0; g < n; ++g)
     if (all[g]) ids.push_back(g);

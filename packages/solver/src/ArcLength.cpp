@@ -60,10 +60,7 @@ bool solve(const Thyra::LinearOpWithSolveBase<double>& A, const Vec& b, Vec& y, 
 }  // namespace
 
 ArcLengthSolver::ArcLengthSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const ArcLengthOptions& options)
-    : ev_(std::move(evaluator)), opt_(options) {
-  for (double v : ev_->problem().prescribed)
-    if (v != 0.0) deadLoad_ = false;
-}
+    : ev_(std::move(evaluator)), opt_(options), deadLoad_(!ev_->problem().prescribesDisplacement()) {}
 
 void ArcLengthSolver::loadDerivative(const Vec& x, double lambda, Vec& fl) const {
   auto fm = fl.clone_v();

@@ -119,9 +119,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   std::vector<std::pair<long long, long long>> ownedBrokenBonds() const;
   /// The owned free DOFs of x as (global free DOF id, value).
   std::vector<std::pair<long long, double>> ownedFreeValues(const Thyra::VectorBase<double>& x) const;
-  /// Sets the owned free DOFs of x from (global free DOF id, value) pairs (others are ignored);
-  /// returns the number of owned DOFs that found no value.
-  long long setOwnedFreeValues(Thyra::VectorBase<double>& x, const std::vector<std::pair<long long, double>>& values) const;
+  /// Sets the owned free DOFs of x from (global free DOF id, value) pairs (others are ignored).
+  void setOwnedFreeValues(Thyra::VectorBase<double>& x, const std::vector<std::pair<long long, double>>& values) const;
   /// Frozen DOFs of the owned detached particles: (global free DOF id, frozen value).
   std::vector<std::pair<long long, double>> ownedFrozenDofs() const;
   /// Restores the damage of a checkpoint on a fresh evaluator (every rank, the same arguments):
@@ -148,6 +147,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// Attached particles (global ids, all ranks) that no chain of intact bonds connects to a
   /// particle with a prescribed DOF: free-floating fragments.
   std::vector<long long> unanchoredParticles() const;
+  /// The union over all ranks of particle global ids, sorted (every rank gets the same list).
+  std::vector<long long> onAnyRank(const std::vector<long long>& mine) const;
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
   void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
                      const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;

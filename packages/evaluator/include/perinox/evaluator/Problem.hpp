@@ -45,6 +45,12 @@ struct ProblemSpec {
   int dim() const { return disc.dim; }
   bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }
   bool rotates() const { return rotation.angle != 0.0; }
+  /// A non-zero displacement is prescribed somewhere (otherwise the load is dead loads only).
+  bool prescribesDisplacement() const {
+    for (double v : prescribed)
+      if (v != 0.0) return true;
+    return false;
+  }
 };
 
 }  // namespace perinox
