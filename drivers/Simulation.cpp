@@ -521,7 +521,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
                 << r.iterations << "  residual " << r.residuals.back()
                 << (deflProbe >= 0 ? "  deflection " : "") << (deflProbe >= 0 ? std::to_string(defl.back()) : "")
                 << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
-                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::endl;
+                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::setprecision(6) << std::endl;
     if (r.iterations <= scene.solver.easyIterations) ds = std::min(A.maximum, 1.5 * ds);
   }
 }
@@ -926,7 +926,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << (scene.solver.method == "ADR" ? ", " : "")
                 << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
                 << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
-                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat
+                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::setprecision(6)
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
     if (scene.solver.adaptive) {

@@ -200,14 +200,3 @@ TEST(EvaluatorReaction, KeptNormMatchesFreshEvaluation) {
   ev->setLoadFactor(0.3);
   check(*x1, "the evaluated state at another load factor");
 }
-
-int main(int argc, char** argv) {
-  Tpetra::ScopeGuard guard(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  // Only rank 0 prints gtest output.
-  if (Teuchos::DefaultComm<int>::getComm()->getRank() != 0) {
-    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
-    delete listeners.Release(listeners.default_result_printer());
-  }
-  return RUN_ALL_TESTS();
-}

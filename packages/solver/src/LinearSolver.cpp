@@ -1,6 +1,8 @@
 // Stratimikos set-up: kept in its own translation unit (Ifpack2 and MueLu headers are heavy).
 #include "perinox/solver/LinearSolver.hpp"
 
+#include "perinox/solver/MumpsSolver.hpp"
+
 #include <Stratimikos_DefaultLinearSolverBuilder.hpp>
 #include <Stratimikos_MueLuHelpers.hpp>
 #include <Teuchos_AbstractFactoryStd.hpp>
@@ -18,6 +20,9 @@ void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder) {
   using Impl = Thyra::Ifpack2PreconditionerFactory<Tpetra::CrsMatrix<double, int, long long, Node>>;
   builder.setPreconditioningStrategyFactory(Teuchos::abstractFactoryStd<Base, Impl>(), "Ifpack2");
   Stratimikos::enableMueLu<int, long long, Node>(builder);
+  builder.setLinearSolveStrategyFactory(
+      Teuchos::abstractFactoryStd<Thyra::LinearOpWithSolveFactoryBase<double>, MumpsLinearOpWithSolveFactory>(),
+      "MUMPS");
 }
 }  // namespace
 
@@ -49,8 +54,8 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
   if (type == "Amesos2" && nranks > 1)
     throw std::invalid_argument(
         "the direct solver (Linear Solver Type = Amesos2) runs on one MPI rank only: this "
-        "Trilinos build's KLU2 returns wrong solutions on more ranks; use Belos with MueLu or "
-        "Ifpack2 (xml/solvers/) or run on one rank");
+        "Trilinos build's KLU2 returns wrong solutions on more ranks; use the MUMPS direct "
+        "solver (preset mumps), Belos with MueLu or Ifpack2 (xml/solvers/), or run on one rank");
   if (type == "Amesos" || params->get<std::string>("Preconditioner Type", "None") == "Ifpack" ||
       params->get<std::string>("Preconditioner Type", "None") == "ML")
     throw std::invalid_argument(

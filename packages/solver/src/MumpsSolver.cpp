@@ -1,0 +1,363 @@
+// MUMPS as a Thyra linear-solve strategy (see MumpsSolver.hpp).
+#include "perinox/solver/MumpsSolver.hpp"
+
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <Teuchos_StandardParameterEntryValidators.hpp>
+#include <Thyra_LinearOpWithSolveBase.hpp>
+#include <Thyra_TpetraThyraWrappers.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_Import.hpp>
+#include <Tpetra_MultiVector.hpp>
+#include <dmumps_c.h>
+#include <mpi.h>
+
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace perinox {
+
+namespace {
+using Node = Tpetra::Map<int, long long>::node_type;
+using Map = Tpetra::Map<int, long long, Node>;
+using Matrix = Tpetra::CrsMatrix<double, int, long long, Node>;
+using MV = Tpetra::MultiVector<double, int, long long, Node>;
+using Importer = Tpetra::Import<int, long long, Node>;
+using Extract = Thyra::TpetraOperatorVectorExtraction<double, int, long long, Node>;
+
+// MUMPS's codes that a user can act on, in words (the MUMPS users' guide, section "Error
+// diagnostics"); anything else is reported with its numbers.
+std::string mumpsMessage(int infog1, int infog2) {
+  std::ostringstream s;
+  switch (infog1) {
+    case -10: s << "the matrix is numerically singular"; break;
+    case -6: s << "the matrix is structurally singular (rank " << infog2 << ")"; break;
+    case -5:
+    case -7:
+    case -13: s << "MUMPS could not allocate " << infog2 << " entries of memory"; break;
+    case -8:
+    case -9:
+    case -14:
+    case -15: s << "MUMPS's working space was too small even after enlarging it (INFOG(1) = " << infog1 << ")"; break;
+    default: s << "MUMPS error INFOG(1) = " << infog1 << ", INFOG(2) = " << infog2;
+  }
+  return s.str();
+}
+
+MPI_Comm rawComm(const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+  auto mpi = Teuchos::rcp_dynamic_cast<const Teuchos::MpiComm<int>>(comm);
+  return mpi.is_null() ? MPI_COMM_SELF : (*mpi->getRawMpiComm())();
+}
+
+// One MUMPS instance: the analysis of one sparsity pattern and the factors of the last matrix.
+class MumpsContext {
+ public:
+  MumpsContext(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, int ordering, int memoryRelaxation)
+      : comm_(rawComm(comm)) {
+    MPI_Comm_rank(comm_, &rank_);
+    id_.par = 1;  // rank 0 works too
+    id_.sym = 0;  // general (the tangent is not symmetric)
+    id_.comm_fortran = static_cast<MUMPS_INT>(MPI_Comm_c2f(comm_));
+    id_.job = -1;
+    dmumps_c(&id_);
+    if (id_.infog[0] < 0) throw std::runtime_error("MUMPS: initialisation failed: " + mumpsMessage(id_.infog[0], id_.infog[1]));
+    id_.icntl[0] = -1;  // no MUMPS printing: failures are reported by perinox
+    id_.icntl[1] = -1;
+    id_.icntl[2] = -1;
+    id_.icntl[3] = 0;
+    id_.icntl[6] = ordering;           // ICNTL(7)
+    id_.icntl[13] = memoryRelaxation;  // ICNTL(14)
+    id_.icntl[17] = 3;                 // ICNTL(18): distributed assembled input
+  }
+  ~MumpsContext() {
+    id_.job = -2;
+    dmumps_c(&id_);
+  }
+  MumpsContext(const MumpsContext&) = delete;
+  MumpsContext& operator=(const MumpsContext&) = delete;
+
+  void factor(const Matrix& A) {
+    const auto rowMap = A.getRowMap();
+    if (!A.getDomainMap()->isSameAs(*rowMap) || !A.getRangeMap()->isSameAs(*rowMap))
+      throw std::invalid_argument("MUMPS: the matrix's domain and range must be its row layout (perinox's Jacobians are)");
+    const long long n = static_cast<long long>(rowMap->getGlobalNumElements());
+    if (n > 2147483647LL) throw std::invalid_argument("MUMPS: more than 2^31 - 1 unknowns");
+    if (rowMap_.is_null() || !rowMap->isSameAs(*rowMap_)) numberRows(rowMap);
+    if (colMap_.get() != A.getColMap().get()) numberColumns(A.getColMap());
+    auto lcl = A.getLocalMatrixHost();
+    const std::size_t nnz = lcl.values.extent(0);
+    std::vector<MUMPS_INT> irn(nnz), jcn(nnz);
+    a_.resize(nnz);
+    auto colNumber = colNumber_->getData(0);
+    for (int r = 0; r < lcl.numRows(); ++r) {
+      const auto row = static_cast<MUMPS_INT>(rowOffset_ + r + 1);
+      for (auto k = lcl.graph.row_map(r); k < lcl.graph.row_map(r + 1); ++k) {
+        irn[k] = row;
+        jcn[k] = static_cast<MUMPS_INT>(colNumber[lcl.graph.entries(k)]);
+        a_[k] = lcl.values(k);
+      }
+    }
+    // The analysis (ordering, symbolic factorisation) is kept while no rank's pattern changes.
+    int changed = !analysed_ || n != n_ || irn != irn_ || jcn != jcn_;
+    MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_LOR, comm_);
+    if (changed) {
+      irn_.swap(irn);
+      jcn_.swap(jcn);
+      n_ = n;
+      analysed_ = false;
+    }
+    id_.n = static_cast<MUMPS_INT>(n_);
+    id_.nnz_loc = static_cast<MUMPS_INT8>(nnz);
+    id_.irn_loc = irn_.data();
+    id_.jcn_loc = jcn_.data();
+    id_.a_loc = a_.data();
+    if (!analysed_) {
+      call(1, "analysis");
+      analysed_ = true;
+    }
+    // Factorise; when MUMPS finds its working-space estimate too small (pivoting can need more
+    // than the analysis predicted), enlarge it and try again.
+    for (int attempt = 0;; ++attempt) {
+      id_.job = 2;
+      dmumps_c(&id_);
+      const int e = id_.infog[0];
+      if ((e == -8 || e == -9 || e == -14 || e == -15) && attempt < 4) {
+        id_.icntl[13] *= 2;
+        continue;
+      }
+      if (e < 0) {
+        factored_ = false;
+        throw std::runtime_error("MUMPS: numeric factorization failed: " + mumpsMessage(e, id_.infog[1]));
+      }
+      break;
+    }
+    factored_ = true;
+  }
+
+  void solve(bool transpose, const MV& B, MV& X) {
+    if (!factored_) throw std::logic_error("MUMPS: solve without a factorisation");
+    if (!B.getMap()->isSameAs(*rowMap_) || !X.getMap()->isSameAs(*rowMap_))
+      throw std::invalid_argument("MUMPS: the vectors' layout differs from the matrix's rows");
+    const std::size_t nrhs = B.getNumVectors();
+    MV root(rootMap_, nrhs);
+    root.doImport(B, *toRoot_, Tpetra::INSERT);
+    const std::size_t n = static_cast<std::size_t>(n_);
+    if (rank_ == 0) {
+      rhs_.assign(n * nrhs, 0.0);
+      for (std::size_t j = 0; j < nrhs; ++j) {
+        auto col = root.getData(j);
+        std::copy(col.begin(), col.end(), rhs_.begin() + j * n);
+      }
+      id_.rhs = rhs_.data();
+      id_.nrhs = static_cast<MUMPS_INT>(nrhs);
+      id_.lrhs = static_cast<MUMPS_INT>(n);
+    }
+    id_.icntl[8] = transpose ? 2 : 1;  // ICNTL(9): 1 solves A x = b, otherwise A^T x = b
+    call(3, "solve");
+    if (rank_ == 0) {
+      for (std::size_t j = 0; j < nrhs; ++j) {
+        auto col = root.getDataNonConst(j);
+        std::copy(rhs_.begin() + j * n, rhs_.begin() + (j + 1) * n, col.begin());
+      }
+    }
+    X.doExport(root, *toRoot_, Tpetra::INSERT);
+  }
+
+ private:
+  // MUMPS numbers the unknowns 1..n; here rank r's rows come after those of ranks 0..r-1, in
+  // local order (Tpetra's global indices need not be contiguous). The right-hand side is
+  // gathered to rank 0 in that order: the root layout lists every row's global index by number.
+  void numberRows(const Teuchos::RCP<const Map>& rowMap) {
+    const long long nLocal = static_cast<long long>(rowMap->getNodeNumElements());
+    long long offset = 0;
+    MPI_Exscan(&nLocal, &offset, 1, MPI_LONG_LONG, MPI_SUM, comm_);
+    rowOffset_ = rank_ == 0 ? 0 : offset;
+    rowNumber_ = Teuchos::rcp(new MV(rowMap, 1));
+    for (long long i = 0; i < nLocal; ++i)
+      rowNumber_->replaceLocalValue(static_cast<int>(i), 0, static_cast<double>(rowOffset_ + i + 1));
+
+    int size = 1;
+    MPI_Comm_size(comm_, &size);
+    const int count = static_cast<int>(nLocal);
+    std::vector<int> counts(size), displs(size);
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    auto mine = rowMap->getNodeElementList();
+    std::vector<long long> all(rank_ == 0 ? static_cast<std::size_t>(displs[size - 1] + counts[size - 1]) : 0);
+    MPI_Gatherv(mine.getRawPtr(), count, MPI_LONG_LONG, all.data(), counts.data(), displs.data(), MPI_LONG_LONG, 0,
+                comm_);
+    const auto invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+    rootMap_ = Teuchos::rcp(new Map(invalid, Teuchos::ArrayView<const long long>(all), rowMap->getIndexBase(),
+                                    rowMap->getComm()));
+    toRoot_ = Teuchos::rcp(new Importer(rowMap, rootMap_));
+    rowMap_ = rowMap;
+    colMap_ = Teuchos::null;
+  }
+
+  // The numbers of the local matrix's columns, brought from the rows' owners (a Jacobian's column
+  // layout changes when bonds break).
+  void numberColumns(const Teuchos::RCP<const Map>& colMap) {
+    colNumber_ = Teuchos::rcp(new MV(colMap, 1));
+    colNumber_->doImport(*rowNumber_, Importer(rowMap_, colMap), Tpetra::INSERT);
+    colMap_ = colMap;
+  }
+
+  void call(int job, const char* what) {
+    id_.job = job;
+    dmumps_c(&id_);
+    if (id_.infog[0] < 0)  // INFOG is the same on every rank: all throw together
+      throw std::runtime_error(std::string("MUMPS: ") + what + " failed: " + mumpsMessage(id_.infog[0], id_.infog[1]));
+  }
+
+  MPI_Comm comm_;
+  int rank_ = 0;
+  DMUMPS_STRUC_C id_{};
+  std::vector<MUMPS_INT> irn_, jcn_;
+  std::vector<double> a_, rhs_;
+  long long n_ = -1, rowOffset_ = 0;
+  Teuchos::RCP<MV> rowNumber_, colNumber_;  // MUMPS's 1-based numbers of the rows and local columns
+  bool analysed_ = false, factored_ = false;
+  Teuchos::RCP<const Map> rowMap_, colMap_, rootMap_;
+  Teuchos::RCP<Importer> toRoot_;
+};
+
+class MumpsLinearOpWithSolve : public Thyra::LinearOpWithSolveBase<double> {
+ public:
+  void initialize(const Teuchos::RCP<const Thyra::LinearOpBase<double>>& op,
+                  const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
+                  const std::shared_ptr<MumpsContext>& context) {
+    op_ = op;
+    src_ = src;
+    context_ = context;
+  }
+  const std::shared_ptr<MumpsContext>& context() const { return context_; }
+  Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> extractSource() {
+    auto s = src_;
+    src_ = Teuchos::null;
+    return s;
+  }
+
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> range() const override {
+    return op_.is_null() ? Teuchos::null : op_->range();
+  }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> domain() const override {
+    return op_.is_null() ? Teuchos::null : op_->domain();
+  }
+
+ protected:
+  bool opSupportedImpl(Thyra::EOpTransp t) const override { return Thyra::opSupported(*op_, t); }
+  void applyImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& X,
+                 const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& Y, const double alpha,
+                 const double beta) const override {
+    Thyra::apply(*op_, t, X, Y, alpha, beta);
+  }
+  bool solveSupportsImpl(Thyra::EOpTransp) const override { return true; }
+  bool solveSupportsSolveMeasureTypeImpl(Thyra::EOpTransp, const Thyra::SolveMeasureType&) const override {
+    return true;  // a direct solve meets any tolerance a Newton step asks for
+  }
+  Thyra::SolveStatus<double> solveImpl(const Thyra::EOpTransp t, const Thyra::MultiVectorBase<double>& B,
+                                       const Teuchos::Ptr<Thyra::MultiVectorBase<double>>& X,
+                                       const Teuchos::Ptr<const Thyra::SolveCriteria<double>>) const override {
+    auto b = Extract::getConstTpetraMultiVector(Teuchos::rcpFromRef(B));
+    auto x = Extract::getTpetraMultiVector(Teuchos::rcpFromPtr(X));
+    context_->solve(Thyra::real_trans(t) != Thyra::NOTRANS, *b, *x);
+    Thyra::SolveStatus<double> status;
+    status.solveStatus = Thyra::SOLVE_STATUS_CONVERGED;
+    return status;
+  }
+
+ private:
+  Teuchos::RCP<const Thyra::LinearOpBase<double>> op_;
+  Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> src_;
+  std::shared_ptr<MumpsContext> context_;
+};
+
+Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& src) {
+  auto op = src.getOp();
+  if (op.is_null()) return Teuchos::null;
+  auto tpetraOp = Extract::getConstTpetraOperator(op);
+  return Teuchos::rcp_dynamic_cast<const Matrix>(tpetraOp);
+}
+
+const char* const kOrdering = "Ordering";
+const char* const kRelaxation = "Memory Relaxation Percent";
+}  // namespace
+
+MumpsLinearOpWithSolveFactory::MumpsLinearOpWithSolveFactory() = default;
+
+bool MumpsLinearOpWithSolveFactory::isCompatible(const Thyra::LinearOpSourceBase<double>& src) const {
+  try {
+    return !crsMatrix(src).is_null();
+  } catch (const std::exception&) {
+    return false;  // not a Tpetra operator
+  }
+}
+
+Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> MumpsLinearOpWithSolveFactory::createOp() const {
+  return Teuchos::rcp(new MumpsLinearOpWithSolve());
+}
+
+void MumpsLinearOpWithSolveFactory::initializeOp(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
+                                                 Thyra::LinearOpWithSolveBase<double>* op,
+                                                 const Thyra::ESupportSolveUse) const {
+  TEUCHOS_TEST_FOR_EXCEPT(op == nullptr || src.is_null());
+  auto A = crsMatrix(*src);
+  if (A.is_null())
+    throw std::invalid_argument("MUMPS needs an assembled Tpetra::CrsMatrix (set 'Solver/Jacobian' to Assembled)");
+  auto& lows = Teuchos::dyn_cast<MumpsLinearOpWithSolve>(*op);
+  auto context = lows.context();
+  if (!context) context = std::make_shared<MumpsContext>(A->getComm(), ordering_, memoryRelaxation_);
+  context->factor(*A);
+  lows.initialize(src->getOp(), src, context);
+}
+
+void MumpsLinearOpWithSolveFactory::uninitializeOp(Thyra::LinearOpWithSolveBase<double>* op,
+                                                   Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* fwdOpSrc,
+                                                   Teuchos::RCP<const Thyra::PreconditionerBase<double>>* prec,
+                                                   Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* approx,
+                                                   Thyra::ESupportSolveUse*) const {
+  TEUCHOS_TEST_FOR_EXCEPT(op == nullptr);
+  auto src = Teuchos::dyn_cast<MumpsLinearOpWithSolve>(*op).extractSource();
+  if (fwdOpSrc) *fwdOpSrc = src;
+  if (prec) *prec = Teuchos::null;
+  if (approx) *approx = Teuchos::null;
+}
+
+void MumpsLinearOpWithSolveFactory::setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& params) {
+  TEUCHOS_TEST_FOR_EXCEPT(params.is_null());
+  params->validateParametersAndSetDefaults(*getValidParameters());
+  params_ = params;
+  ordering_ = Teuchos::getIntegralValue<int>(*params_, kOrdering);
+  memoryRelaxation_ = params_->get<int>(kRelaxation);
+  if (memoryRelaxation_ < 0)
+    throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
+}
+
+Teuchos::RCP<Teuchos::ParameterList> MumpsLinearOpWithSolveFactory::getNonconstParameterList() { return params_; }
+
+Teuchos::RCP<Teuchos::ParameterList> MumpsLinearOpWithSolveFactory::unsetParameterList() {
+  auto p = params_;
+  params_ = Teuchos::null;
+  return p;
+}
+
+Teuchos::RCP<const Teuchos::ParameterList> MumpsLinearOpWithSolveFactory::getParameterList() const { return params_; }
+
+Teuchos::RCP<const Teuchos::ParameterList> MumpsLinearOpWithSolveFactory::getValidParameters() const {
+  static Teuchos::RCP<Teuchos::ParameterList> valid;
+  if (valid.is_null()) {
+    valid = Teuchos::rcp(new Teuchos::ParameterList("MUMPS"));
+    Teuchos::setStringToIntegralParameter<int>(
+        kOrdering, "Auto", "fill-reducing ordering (MUMPS ICNTL(7)); Auto lets MUMPS choose",
+        Teuchos::tuple<std::string>("Auto", "AMD", "AMF", "Scotch", "PORD", "METIS", "QAMD"),
+        Teuchos::tuple<int>(7, 0, 2, 3, 4, 5, 6), valid.get());
+    valid->set(kRelaxation, 30,
+               "extra working space over MUMPS's estimate, percent (ICNTL(14)); doubled and retried when short");
+  }
+  return valid;
+}
+
+std::string MumpsLinearOpWithSolveFactory::description() const { return "perinox::MumpsLinearOpWithSolveFactory"; }
+
+}  // namespace perinox
