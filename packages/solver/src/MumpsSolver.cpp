@@ -84,7 +84,11 @@ class MumpsContext {
     const long long n = static_cast<long long>(rowMap->getGlobalNumElements());
     if (n > 2147483647LL) throw std::invalid_argument("MUMPS: more than 2^31 - 1 unknowns");
     if (rowMap_.is_null() || !rowMap->isSameAs(*rowMap_)) numberRows(rowMap);
-    if (colMap_.get() != A.getColMap().get()) numberColumns(A.getColMap());
+    // Numbering the columns is collective: renumber on every rank when any rank's column layout
+    // is a new object (the kept RCP stops a new layout from reusing the old one's address).
+    int newColumns = colMap_.get() != A.getColMap().get();
+    MPI_Allreduce(MPI_IN_PLACE, &newColumns, 1, MPI_INT, MPI_LOR, comm_);
+    if (newColumns) numberColumns(A.getColMap());
     auto lcl = A.getLocalMatrixHost();
     const std::size_t nnz = lcl.values.extent(0);
     std::vector<MUMPS_INT> irn(nnz), jcn(nnz);
