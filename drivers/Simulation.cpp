@@ -29,6 +29,24 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// Progress lines set fixed or scientific formats and precisions on std::cout; this restores the
+/// stream's format when the line's scope ends, so no line inherits another's (a load factor
+/// printed after the "2 decimals" of an elapsed time read 0.24 for 0.2442).
+class CoutFormat {
+ public:
+  CoutFormat() : flags_(std::cout.flags()), precision_(std::cout.precision()) {}
+  ~CoutFormat() {
+    std::cout.flags(flags_);
+    std::cout.precision(precision_);
+  }
+  CoutFormat(const CoutFormat&) = delete;
+  CoutFormat& operator=(const CoutFormat&) = delete;
+
+ private:
+  std::ios_base::fmtflags flags_;
+  std::streamsize precision_;
+};
+
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -511,17 +529,21 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     const std::size_t n = lambdas.size();
     if (n >= 3 && lambdas[n - 2] > lambdas[n - 3] && lambdas[n - 1] < lambdas[n - 2]) {
       res.limitPoints.push_back({step - 1, lambdas[n - 2], defl[n - 2]});
-      if (rank == 0 && !quiet)
+      if (rank == 0 && !quiet) {
+        CoutFormat keep;
         std::cout << std::setprecision(10) << "  limit point passed: the load factor peaked at " << lambdas[n - 2] << " (step " << step - 1
                   << ", deflection " << defl[n - 2] << ") and now decreases\n";
+      }
     }
-    if (rank == 0 && !quiet)
+    if (rank == 0 && !quiet) {
+      CoutFormat keep;
       std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(6) << lambda
                 << "  arc " << std::scientific << std::setprecision(3) << ds << "  corrector " << std::setw(2)
                 << r.iterations << "  residual " << r.residuals.back()
                 << (deflProbe >= 0 ? "  deflection " : "") << (deflProbe >= 0 ? std::to_string(defl.back()) : "")
                 << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
-                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::setprecision(6) << std::endl;
+                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::endl;
+    }
     if (r.iterations <= scene.solver.easyIterations) ds = std::min(A.maximum, 1.5 * ds);
   }
 }
@@ -917,7 +939,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     for (std::size_t k = 0; k < scene.probes.size(); ++k)
       if (scene.probes[k].quantity != "Profile")
         res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
-    if (rank == 0 && !options.quiet)
+    if (rank == 0 && !options.quiet) {
+      CoutFormat keep;
       std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
                 << (scene.solver.method == "ADR" ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
                 << (scene.solver.method == "ADR" ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
@@ -926,8 +949,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << (scene.solver.method == "ADR" ? ", " : "")
                 << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
                 << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
-                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::defaultfloat << std::setprecision(6)
+                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
+    }
     // After easy convergence at a reduced increment, grow back toward the nominal increment.
     if (scene.solver.adaptive) {
       // Adaptive stepping: grow after easy steps, up to Max Increment (cut-backs shrink it).
@@ -1116,6 +1140,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
 
     // The residual table of seed 000's Tables 2-4: one column per step, one row per iteration.
     if (!options.quiet) {
+      CoutFormat keep;
       std::size_t rows = 0;
       for (const auto& s : res.steps) rows = std::max(rows, s.residuals.size());
       std::cout << "\nNewton residuals (normalised) per load step:\n   iter";
@@ -1129,7 +1154,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
           else
             std::cout << std::setw(11) << "-";
         }
-        std::cout << std::defaultfloat << "\n";
+        std::cout << "\n";
       }
     }
     if (scene.output.plots && !options.plotScript.empty()) {
@@ -1143,9 +1168,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     fs::remove_all(options.outputDir);
     fs::rename(staging, options.outputDir);
     if (!options.quiet) {
+      CoutFormat keep;
       if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
       std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
-                << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)" << std::defaultfloat << "\n";
+                << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)\n";
     }
   }
   comm->barrier();
