@@ -103,15 +103,14 @@ class MumpsContext {
       }
     }
     // The analysis (ordering, symbolic factorisation) is kept while no rank's pattern changes.
-    int changed = !analysed_ || n != n_ || irn != irn_ || jcn != jcn_;
+    int changed = !analysed_ || n != id_.n || irn != irn_ || jcn != jcn_;
     MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT, MPI_LOR, comm_);
     if (changed) {
       irn_.swap(irn);
       jcn_.swap(jcn);
-      n_ = n;
+      id_.n = static_cast<MUMPS_INT>(n);
       analysed_ = false;
     }
-    id_.n = static_cast<MUMPS_INT>(n_);
     id_.nnz_loc = static_cast<MUMPS_INT8>(nnz);
     id_.irn_loc = irn_.data();
     id_.jcn_loc = jcn_.data();
@@ -122,20 +121,15 @@ class MumpsContext {
     }
     // Factorise; when MUMPS finds its working-space estimate too small (pivoting can need more
     // than the analysis predicted), enlarge it and try again.
+    factored_ = false;
     for (int attempt = 0;; ++attempt) {
       id_.job = 2;
       dmumps_c(&id_);
       const int e = id_.infog[0];
-      if ((e == -8 || e == -9 || e == -14 || e == -15) && attempt < 4) {
-        id_.icntl[13] *= 2;
-        continue;
-      }
-      if (e < 0) {
-        factored_ = false;
-        throw std::runtime_error("MUMPS: numeric factorization failed: " + mumpsMessage(e, id_.infog[1]));
-      }
-      break;
+      if (!((e == -8 || e == -9 || e == -14 || e == -15) && attempt < 4)) break;
+      id_.icntl[13] *= 2;
     }
+    check("numeric factorization");
     factored_ = true;
   }
 
@@ -146,7 +140,7 @@ class MumpsContext {
     const std::size_t nrhs = B.getNumVectors();
     MV root(rootMap_, nrhs);
     root.doImport(B, *toRoot_, Tpetra::INSERT);
-    const std::size_t n = static_cast<std::size_t>(n_);
+    const std::size_t n = static_cast<std::size_t>(id_.n);
     if (rank_ == 0) {
       rhs_.assign(n * nrhs, 0.0);
       for (std::size_t j = 0; j < nrhs; ++j) {
@@ -210,6 +204,9 @@ class MumpsContext {
   void call(int job, const char* what) {
     id_.job = job;
     dmumps_c(&id_);
+    check(what);
+  }
+  void check(const char* what) const {
     if (id_.infog[0] < 0)  // INFOG is the same on every rank: all throw together
       throw std::runtime_error(std::string("MUMPS: ") + what + " failed: " + mumpsMessage(id_.infog[0], id_.infog[1]));
   }
@@ -219,7 +216,7 @@ class MumpsContext {
   DMUMPS_STRUC_C id_{};
   std::vector<MUMPS_INT> irn_, jcn_;
   std::vector<double> a_, rhs_;
-  long long n_ = -1, rowOffset_ = 0;
+  long long rowOffset_ = 0;
   Teuchos::RCP<MV> rowNumber_, colNumber_;  // MUMPS's 1-based numbers of the rows and local columns
   bool analysed_ = false, factored_ = false;
   Teuchos::RCP<const Map> rowMap_, colMap_, rootMap_;
