@@ -626,9 +626,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   // reach the new equilibrium from there (an inverted F on the way, stagnation), reload the
   // damaged body in growing sub-steps (the softening law depends only on the current stretch, so
   // the equilibrium with a given set of intact bonds does not depend on the path): from the state
-  // scaled to half the load, or, if that does not converge, from zero. If the damaged body cannot
-  // carry lam (the reload stalls at a limit point: the snap-back of a running crack under
-  // displacement control), the state at the highest load reached is returned and lam lowered to
+  // scaled to 0.9 of the load (a snap-back usually lowers it by a few per cent), else from half of
+  // it, else from zero. If the damaged body cannot carry lam (the reload stalls at a limit point:
+  // the snap-back of a running crack under displacement control), the state at the highest load
+  // reached is returned, that load found to 'Damage/Reload Tolerance' of lam, and lam lowered to
   // it; the load stepping resumes from there (an event-by-event trace of the snap-back).
   auto reequilibrate = [&](Thyra::VectorBase<double>& xs, double& lam, int& reloads) {
     auto x0 = xs.clone_v();
@@ -638,7 +639,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     double bestMu = 0;
     auto xBest = xs.clone_v();
     NewtonResult bestR;
-    for (double start : {0.5, 0.0}) {
+    for (double start : {0.9, 0.7, 0.5, 0.0}) {
       Thyra::V_StV(Teuchos::ptrFromRef(xs), start, *x0);
       double mu = start, inc = 0.25 * (1.0 - start);
       NewtonResult r;
@@ -647,6 +648,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         evaluator->setLoadFactor(start * lam);
         r = newton.solve(xs);
         iters += r.iterations;
+        ++reloads;
         if (!r.converged) continue;
       }
       auto xc = xs.clone_v();
@@ -663,8 +665,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
           Thyra::copy(xs, xc.ptr());
           rc = r;
           inc *= 1.5;
-        } else if ((inc *= 0.5) < 1e-2) {  // the limit load to 1 %
-          break;
+        } else if (t - mu <= scene.reloadTolerance) {
+          break;  // the limit load lies in [mu, t)
+        } else {
+          inc = 0.5 * (t - mu);  // halve the sub-step that failed (not the grown one t clamped)
         }
       }
       if (mu > bestMu) {
@@ -678,7 +682,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       evaluator->setLoadFactor(lam);
       Thyra::copy(*x0, Teuchos::ptrFromRef(xs));
       first.iterations = iters;
-      first.failure += " (reloading the damaged body from half and from zero load failed too)";
+      first.failure += " (reloading the damaged body from 0.9 and half of the load and from zero failed too)";
       return first;
     }
     Thyra::copy(*xBest, Teuchos::ptrFromRef(xs));

@@ -144,6 +144,9 @@ Teuchos::RCP<ParameterList> buildSchema() {
          "snap-back of softening bonds under displacement control; reported per step as stall_broken_bonds)");
   dm.set("Stall Break Tolerance", 1e-6, "On Stall = Break Most Stretched: bonds within this fraction of (s_cr - s_min) of the largest stretch break together (mirror-image bonds differ by round-off only)");
   dm.set("Max Stall Breaks", 200, "On Stall = Break Most Stretched: stall breaks allowed in a run");
+  dm.set("Reload Tolerance", 0.01,
+         "when a damaged body cannot carry the load it broke at (a snap-back), the highest load it carries is found by reloading "
+         "it, to this fraction of that load (0 < tolerance < 0.5); the load stepping resumes from there");
   s->sublist("Regions", false, "named particle sets");
   s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
   s->sublist("Loads", false, "named loads");
@@ -669,6 +672,9 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       fail(file, "'Damage/Stall Break Tolerance' must be in [0, 1)");
     sc.maxStallBreaks = dm.get<int>("Max Stall Breaks");
     if (sc.maxStallBreaks < 1) fail(file, "'Damage/Max Stall Breaks' must be at least 1");
+    sc.reloadTolerance = dm.get<double>("Reload Tolerance");
+    if (!(sc.reloadTolerance > 0 && sc.reloadTolerance < 0.5))
+      fail(file, "'Damage/Reload Tolerance' must be in (0, 0.5)");
   }
 
   // --- regions ---
