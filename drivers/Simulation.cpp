@@ -139,6 +139,7 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
                       {"newton_iterations_all_attempts", s.newtonIterationsAll},
                       {"linear_solves", s.linearSolves},
                       {"krylov_iterations", s.krylovIterations},
+                      {"linear_failures", s.linearFailures},
                       {"residuals", s.residuals},
                       {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
                       {"cutbacks", s.cutbacks},
@@ -159,6 +160,17 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
   return j;
 }
 
+/// The sentence a run that converged with unconverged linear solves ends with ("" when none did).
+std::string inexactSolvesWarning(const std::vector<StepRecord>& steps) {
+  long long unconverged = 0, solves = 0;
+  for (const auto& st : steps) unconverged += st.linearFailures, solves += st.linearSolves;
+  if (unconverged == 0) return "";
+  return std::to_string(unconverged) + " of " + std::to_string(solves) +
+         " linear solves did not converge (Krylov iteration limit or breakdown); Newton went on with inexact "
+         "directions, which costs Newton iterations (linear_failures per step): raise the Krylov limit or choose a "
+         "stronger preconditioner";
+}
+
 StepRecord stepFromJson(const nlohmann::json& j) {
   StepRecord s;
   s.step = j.at("step");
@@ -167,6 +179,7 @@ StepRecord stepFromJson(const nlohmann::json& j) {
   s.newtonIterationsAll = j.at("newton_iterations_all_attempts");
   s.linearSolves = j.at("linear_solves");
   s.krylovIterations = j.at("krylov_iterations");
+  s.linearFailures = j.value("linear_failures", 0LL);  // absent in checkpoints of older versions
   s.residuals = j.at("residuals").get<std::vector<double>>();
   s.reactionNormalised = j.at("normalised_by") == "reaction";
   s.cutbacks = j.at("cutbacks");
@@ -493,6 +506,7 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
     rec.newtonIterations = r.iterations;
     rec.linearSolves = als.totalLinear().solves - before.solves;
     rec.krylovIterations = als.totalLinear().krylovIterations - before.krylovIterations;
+    rec.linearFailures = als.totalLinear().failures - before.failures;
     rec.newtonIterationsAll = als.totalCorrectorIterations() - correctorsBefore;
     rec.residuals = r.residuals;
     rec.reactionNormalised = r.reactionNormalised;
@@ -756,6 +770,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       r.linearSolves = newton.totalLinear().solves - linearBefore.solves + tangentCounts.solves;
       r.krylovIterations =
           newton.totalLinear().krylovIterations - linearBefore.krylovIterations + tangentCounts.krylovIterations;
+      r.linearFailures = newton.totalLinear().failures - linearBefore.failures + tangentCounts.failures;
     };
     int cut = 0;
     const double stepIncrement = increment;
@@ -953,6 +968,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
                 << (scene.solver.method == "ADR" ? ", " : "")
                 << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
                 << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
+                << (rec.linearFailures > 0 ? "  unconverged linear solves " + std::to_string(rec.linearFailures)
+                                           : std::string())
                 << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
                 << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
     }
@@ -1078,12 +1095,13 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       // The run's totals, one pass over the steps: the whole work (Newton iterations of every
       // attempt, ADR's iterations for ADR; linear solves; Krylov iterations, 0 with a direct
       // solver) and, with damage, the bonds broken, the stall events and the fragment particles.
-      long long newtonAll = 0, solves = 0, krylov = 0, broken = 0, stallBonds = 0, fragments = 0;
+      long long newtonAll = 0, solves = 0, krylov = 0, linearFailures = 0, broken = 0, stallBonds = 0, fragments = 0;
       int stallSteps = 0;
       for (const auto& s : res.steps) {
         newtonAll += s.newtonIterationsAll;
         solves += s.linearSolves;
         krylov += s.krylovIterations;
+        linearFailures += s.linearFailures;
         broken += s.brokenBonds;
         stallBonds += s.stallBrokenBonds;
         stallSteps += s.stallBrokenBonds > 0;
@@ -1092,6 +1110,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       j["newton_iterations_total"] = newtonAll;
       j["linear_solves_total"] = solves;
       j["krylov_iterations_total"] = krylov;
+      j["linear_failures_total"] = linearFailures;
+      const std::string inexact = inexactSolvesWarning(res.steps);
+      if (!inexact.empty()) j["warnings"] = {inexact};
       if (scene.problem->damage) {
         j["broken_bonds_total"] = broken;
         j["stall_broken_bonds_total"] = stallBonds;
@@ -1174,6 +1195,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     if (!options.quiet) {
       CoutFormat keep;
       if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
+      const std::string inexact = inexactSolvesWarning(res.steps);
+      if (!inexact.empty()) std::cout << "note: " << inexact << "\n";
       std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
                 << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)\n";
     }

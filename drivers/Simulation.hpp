@@ -19,6 +19,8 @@ struct StepRecord {
   long long newtonIterationsAll = 0;  // every attempt of the step, cut-backs included
   long long linearSolves = 0;      // linear systems solved in the step, all attempts
   long long krylovIterations = 0;  // Krylov iterations spent on them (0 with a direct solver)
+  long long linearFailures = 0;    // of those, solves the linear solver reported unconverged
+                                   // (Newton went on with the inexact direction)
   std::vector<double> residuals;
   bool reactionNormalised = false;
   bool atRoundoffFloor = false;    // converged on the round-off floor rather than the tolerance

@@ -76,6 +76,8 @@ def main():
     ap.add_argument("--work-counts", choices=["direct", "krylov"],
                     help="check the recorded solver work: totals equal the sums over steps, a linear solve "
                          "for every Newton iteration, and Krylov iterations (>= 1 a solve) or none (direct)")
+    ap.add_argument("--linear-failures", choices=["none", "some"],
+                    help="with --work-counts: no linear solve, or at least one, recorded as unconverged")
     ap.add_argument("--floor", type=float, default=FLOOR,
                     help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
@@ -144,7 +146,8 @@ def main():
             s = json.load(f)
         st = s["steps"]
         for key, total in (("newton_iterations_all_attempts", "newton_iterations_total"),
-                           ("linear_solves", "linear_solves_total"), ("krylov_iterations", "krylov_iterations_total")):
+                           ("linear_solves", "linear_solves_total"), ("krylov_iterations", "krylov_iterations_total"),
+                           ("linear_failures", "linear_failures_total")):
             if sum(x[key] for x in st) != s[total]:
                 fail(f"{total} = {s[total]} is not the sum of the steps' {key}")
         newton = sum(x["newton_iterations"] for x in st)
@@ -155,6 +158,15 @@ def main():
             fail(f"a direct solver recorded {s['krylov_iterations_total']} Krylov iterations")
         if a.work_counts == "krylov" and not s["krylov_iterations_total"] >= s["linear_solves_total"] > 0:
             fail(f"{s['krylov_iterations_total']} Krylov iterations for {s['linear_solves_total']} solves")
+        failures = s["linear_failures_total"]
+        if a.linear_failures == "none" and failures != 0:
+            fail(f"{failures} linear solves recorded as unconverged, expected none")
+        if a.linear_failures == "some" and not 0 < failures <= s["linear_solves_total"]:
+            fail(f"{failures} unconverged linear solves of {s['linear_solves_total']}, expected some")
+        said = any("linear solves did not converge" in w for w in s.get("warnings", []))
+        if said != (failures > 0):
+            fail(f"summary.json's warnings {s.get('warnings', [])} do not match {failures} unconverged linear solves")
+        print(f"work: {failures} unconverged linear solves")
         print(f"work: {newton} Newton iterations in converged solves, {s['newton_iterations_total']} in all, "
               f"{s['linear_solves_total']} linear solves, {s['krylov_iterations_total']} Krylov iterations")
     if a.no_output:

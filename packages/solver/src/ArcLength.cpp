@@ -52,6 +52,7 @@ bool solve(const Thyra::LinearOpWithSolveBase<double>& A, const Vec& b, Vec& y, 
       << (known ? st.achievedTol : NAN)
       << ", requested " << tol << ": Krylov iteration limit or breakdown)";
     why = s.str();
+    ++counts.failures;
     return false;
   }
   return true;

@@ -264,12 +264,14 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
                      residualTest->getStatus() == NOX::StatusTest::Converged;
   result.linearFailures = group.is_null() ? 0 : group->failures();
   if (!group.is_null()) result.linear = group->counts();
+  result.linear.failures = result.linearFailures;
   // When NOX threw, getNumIterations was never read: the residual history (one entry per
   // iterate) counts the iterations it ran.
   totalNewton_ += result.iterations > 0 ? result.iterations
                                         : std::max<long long>(0, static_cast<long long>(result.residuals.size()) - 1);
   totalLinear_.solves += result.linear.solves;
   totalLinear_.krylovIterations += result.linear.krylovIterations;
+  totalLinear_.failures += result.linear.failures;
   if (!result.converged && result.failure.empty()) {
     // The most specific cause first: a linear solver that did not solve the Newton systems
     // makes every later symptom (stagnation, iteration limit) a consequence.

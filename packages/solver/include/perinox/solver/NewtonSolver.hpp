@@ -18,6 +18,7 @@ class PeridynamicEvaluator;
 struct LinearSolveCounts {
   long long solves = 0;
   long long krylovIterations = 0;
+  long long failures = 0;  // solves the linear solver reported unconverged (an inexact direction)
 };
 
 struct NewtonOptions {
