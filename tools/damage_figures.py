@@ -19,6 +19,7 @@ import csv
 import json
 import os
 import sys
+import textwrap
 
 import matplotlib
 
@@ -42,15 +43,21 @@ def scatter(rows, key, title, path, scale, cmap, vmin=None, vmax=None):
     y = [r["y"] + scale * r["uy"] for r in real]
     c = [r[key] for r in real]
     fig, ax = plt.subplots(figsize=(9, 3.6))
-    n = len(real)
-    size = max(2.0, 4000.0 / n)
-    sc = ax.scatter(x, y, c=c, s=size, cmap=cmap, vmin=vmin, vmax=vmax, marker="s")
+    sc = ax.scatter(x, y, c=c, s=1.0, cmap=cmap, vmin=vmin, vmax=vmax, marker="s")
     ax.set_aspect("equal")
     ax.set_xlabel("x + %g u_x (mm)" % scale)
     ax.set_ylabel("y + %g u_y (mm)" % scale)
-    ax.set_title(title, fontsize=9)
+    ax.set_title("\n".join(textwrap.fill(t, 110) for t in title.split("\n")), fontsize=8)
     fig.colorbar(sc, ax=ax, shrink=0.8, label=key)
     fig.tight_layout()
+    # Squares 0.9 of the lattice spacing wide, in the drawn axes' scale (marker sizes are in
+    # points squared), so a fine lattice reads as a field and a coarse one as particles.
+    xs = sorted({round(r["x"], 9) for r in real})
+    dx = min((b - a for a, b in zip(xs, xs[1:]) if b - a > 1e-9), default=1.0)
+    fig.canvas.draw()
+    width_pt = ax.get_window_extent().width * 72.0 / fig.dpi
+    per_mm = width_pt / (ax.get_xlim()[1] - ax.get_xlim()[0])
+    sc.set_sizes([(0.9 * dx * per_mm) ** 2])
     fig.savefig(path, dpi=130)
     plt.close(fig)
 
