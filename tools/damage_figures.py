@@ -37,6 +37,19 @@ def summary(d):
         return json.load(f)
 
 
+def fit_squares(fig, panels):
+    """Sizes each panel's square markers to 0.9 of its lattice spacing in the drawn axes' scale
+    (marker sizes are in points squared), so a fine lattice reads as a field and a coarse one as
+    particles. panels: (axes, scatter collection, the particles' reference x)."""
+    fig.canvas.draw()
+    for ax, sc, x in panels:
+        xs = sorted({round(v, 9) for v in x})
+        dx = min((b - a for a, b in zip(xs, xs[1:]) if b - a > 1e-9), default=1.0)
+        width_pt = ax.get_window_extent().width * 72.0 / fig.dpi
+        per_mm = width_pt / (ax.get_xlim()[1] - ax.get_xlim()[0])
+        sc.set_sizes([(0.9 * dx * per_mm) ** 2])
+
+
 def scatter(rows, key, title, path, scale, cmap, vmin=None, vmax=None):
     real = [r for r in rows if r["fictitious"] == 0]
     x = [r["x"] + scale * r["ux"] for r in real]
@@ -50,14 +63,7 @@ def scatter(rows, key, title, path, scale, cmap, vmin=None, vmax=None):
     ax.set_title("\n".join(textwrap.fill(t, 110) for t in title.split("\n")), fontsize=8)
     fig.colorbar(sc, ax=ax, shrink=0.8, label=key)
     fig.tight_layout()
-    # Squares 0.9 of the lattice spacing wide, in the drawn axes' scale (marker sizes are in
-    # points squared), so a fine lattice reads as a field and a coarse one as particles.
-    xs = sorted({round(r["x"], 9) for r in real})
-    dx = min((b - a for a, b in zip(xs, xs[1:]) if b - a > 1e-9), default=1.0)
-    fig.canvas.draw()
-    width_pt = ax.get_window_extent().width * 72.0 / fig.dpi
-    per_mm = width_pt / (ax.get_xlim()[1] - ax.get_xlim()[0])
-    sc.set_sizes([(0.9 * dx * per_mm) ** 2])
+    fit_squares(fig, [(ax, sc, [r["x"] for r in real])])
     fig.savefig(path, dpi=130)
     plt.close(fig)
 
@@ -93,14 +99,17 @@ def stretch_figure(runs, fe_csv, path):
         panels.append(("linear-elastic FEM (CalculiX) on the same bonds: largest %.4f" % max(p[2] for p in pts), pts))
     vmax = 2.0 * max(p[2] for p in panels[-1][1]) if fe_csv else max(max(p[2] for p in q[1]) for q in panels)
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), squeeze=False)
+    drawn = []
     for ax, (title, pts) in zip(axes[:, 0], panels):
-        sc = ax.scatter([p[0] for p in pts], [p[1] for p in pts], c=[p[2] for p in pts], s=110, marker="s",
+        sc = ax.scatter([p[0] for p in pts], [p[1] for p in pts], c=[p[2] for p in pts], s=1.0, marker="s",
                         cmap="viridis", vmin=0.0, vmax=vmax)
         ax.set_aspect("equal")
         ax.set_title(title, fontsize=9)
         fig.colorbar(sc, ax=ax, shrink=0.9, extend="max", label="largest bond stretch")
+        drawn.append((ax, sc, [p[0] for p in pts]))
     axes[-1, 0].set_xlabel("x (mm)")
     fig.tight_layout()
+    fit_squares(fig, drawn)
     fig.savefig(path, dpi=130)
     plt.close(fig)
 
