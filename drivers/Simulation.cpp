@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -282,28 +284,50 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
     }
     if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
     pl->remove("Output", false);
-    std::ostringstream o;
-    Teuchos::writeParameterListToXmlOStream(*pl, o);
-    return o.str();
+    // "Sublist/Key" -> value: the order of the keys and whether a value came from the scene
+    // file, a --set or a default does not matter, only the values.
+    std::map<std::string, std::pair<std::string, std::string>> values;  // exact, shown
+    std::function<void(const Teuchos::ParameterList&, const std::string&)> walk =
+        [&](const Teuchos::ParameterList& l, const std::string& prefix) {
+          for (auto it = l.begin(); it != l.end(); ++it) {
+            const std::string key = prefix + l.name(it);
+            const auto& e = l.entry(it);
+            if (e.isList()) {
+              walk(Teuchos::getValue<Teuchos::ParameterList>(e), key + "/");
+            } else {
+              std::ostringstream exact, shown;
+              exact << std::setprecision(17) << e.getAny(false);
+              shown << e.getAny(false);
+              values[key] = {exact.str(), shown.str()};
+            }
+          }
+        };
+    walk(*pl, "");
+    return values;
   };
-  const std::string mine = physics(resolvedSceneText(scene)), theirs = physics(c.state["scene"].get<std::string>());
+  const auto mine = physics(resolvedSceneText(scene)), theirs = physics(c.state["scene"].get<std::string>());
   if (mine != theirs) {
-    std::istringstream a(mine), b(theirs);
-    std::string la, lb;
-    int line = 0;
-    while (true) {
-      ++line;
-      const bool ga = static_cast<bool>(std::getline(a, la)), gb = static_cast<bool>(std::getline(b, lb));
-      if (!ga || !gb || la != lb) break;
+    std::string what;
+    for (const auto& [k, v] : mine) {
+      const auto t = theirs.find(k);
+      if (t == theirs.end()) {
+        what = "'" + k + "' = " + v.second + " now, not in the checkpoint's scene";
+        break;
+      }
+      if (t->second.first != v.first) {
+        what = "'" + k + "' = " + v.second + " now, " + t->second.second + " in the checkpoint";
+        break;
+      }
     }
-    auto trim = [](std::string t) {
-      t.erase(0, t.find_first_not_of(" \t"));
-      return t;
-    };
+    if (what.empty())
+      for (const auto& [k, v] : theirs)
+        if (!mine.count(k)) {
+          what = "'" + k + "' = " + v.second + " in the checkpoint, not in this scene";
+          break;
+        }
     throw std::invalid_argument(where + " was written for another scene (the same scene and --set options are "
                                 "needed, except run controls: Solver/Max Total Steps, Linear Solver Preset, "
-                                "Linear Solver, Verbosity, Damage/Max Stall Breaks, Output); resolved scene line " + std::to_string(line) + ": now '" +
-                                trim(la) + "', in the checkpoint '" + trim(lb) + "'");
+                                "Linear Solver, Verbosity, Damage/Max Stall Breaks, Output): " + what);
   }
   // Everything the loop will read, checked now, before any output exists.
   try {

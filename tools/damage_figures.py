@@ -131,7 +131,13 @@ def main():
     rows = fields(a.damage_run)
     G = s["scene"].get("G", "?") if isinstance(s.get("scene"), dict) else "?"
     nreal = sum(1 for r in rows if r["fictitious"] == 0)
-    state = "converged to the end" if s["converged"] else "stopped: " + s.get("failure", "")[:80]
+    why = s.get("failure", "")
+    if s["converged"]:
+        state = "converged to the end"
+    elif why.startswith("reached 'Solver/Max Total Steps'"):  # a snapshot: a run resumed for a step
+        state = "stopped at its step limit at load factor %.4g" % s["steps"][-1]["load_factor"]
+    else:
+        state = "stopped: " + why[:80]
     head = "%d particles, %d bonds broken, %d steps, %s" % (nreal, s.get("broken_bonds_total", 0), len(s["steps"]), state)
     if "broken_bonds_total" in s:  # a run with damage
       scatter(rows, "damage", "damage index phi on the deformed particles (x%g)\n%s" % (a.scale, head),
