@@ -2,7 +2,8 @@
 """Checks the damage pattern of a plate-with-a-hole run (fields.csv of one or more runs).
 
     check_damage.py --hole-radius R [--near D] [--symmetric] [--min-broken N]
-                    [--to-the-end] [--symmetric-within H] [--crack-to-edges W] DIR [DIR2 ...]
+                    [--to-the-end] [--symmetric-within H] [--crack-to-edges W] [--crack-band W]
+                    DIR [DIR2 ...]
 
 - at least N bonds broken (summary.json);
 - every damaged real particle (phi > 0) lies within D of the hole's edge, centred at the origin
@@ -23,6 +24,10 @@
   edge; measured beside the crack: phi 0.45-0.53 at G = 0.5, below 0.5 in 4 of the 6 rows, and
   0.40-0.47 at G = 1), so that test fails on a clean crack and passes on scattered damage with no
   separation; the opening is what tells a crack from diffuse damage;
+- --crack-band W: the weaker form for a crack band several particles wide (the 150 x 50 plate,
+  where damaged particles hang between the two halves next to the hole): every such row holds,
+  within |x| <= W, a damaged particle (phi >= 0.25), and u_x of its rightmost particle within W
+  minus that of its leftmost is at least half the separation of the ends;
 - --stretch-far-ratio F (for a run without damage): the bond stretches at the last step, every
   bond of the scene's families (horizon factor and spacing from scene.resolved.xml, fictitious
   particles included). The largest stretch of a bond whose midpoint lies more than R + dx/2 from
@@ -106,6 +111,7 @@ def main():
     ap.add_argument("--to-the-end", action="store_true")
     ap.add_argument("--symmetric-within", type=float, default=None)
     ap.add_argument("--crack-to-edges", type=float, default=None)
+    ap.add_argument("--crack-band", type=float, default=None)
     ap.add_argument("--symmetric", action="store_true")
     ap.add_argument("--min-broken", type=int, default=1)
     ap.add_argument("--stretch-far-ratio", type=float, default=None)
@@ -178,6 +184,24 @@ def main():
                 fail(f"the crack does not cross the row y = {yr} within |x| <= {W}: no neighbours with phi >= 0.25 "
                      f"and a u_x jump >= half the end separation {sep:.4g}; {what}")
         print(f"the crack crosses all {len(ys)} rows between the hole and the free edges within |x| <= {W}, "
+              f"opened by at least half the end separation {sep:.4g}")
+    if a.crack_band is not None:
+        W = a.crack_band
+        fict_ux = [ux[pid] for pid, (x, y, phi, fic) in rows.items() if fic]
+        if not fict_ux:
+            fail("--crack-band needs the fictitious end layers (their u_x is the end separation)")
+        sep = max(fict_ux) - min(fict_ux)
+        ys = sorted({round(y, 9) for (x, y, phi, fic) in rows.values() if not fic and abs(y) > a.hole_radius})
+        for yr in ys:
+            band = sorted((x, phi, ux[pid]) for pid, (x, y, phi, fic) in rows.items()
+                          if not fic and abs(round(y, 9) - yr) < 1e-9 and abs(x) <= W + 1e-9)
+            if not band or max(p for _, p, _ in band) < 0.25:
+                fail(f"no damaged particle (phi >= 0.25) in the row y = {yr} within |x| <= {W}")
+            opening = band[-1][2] - band[0][2]
+            if opening < 0.5 * sep:
+                fail(f"the crack band does not open the row y = {yr}: u_x rises by {opening:.4g} from x = "
+                     f"{band[0][0]} to {band[-1][0]}, less than half the end separation {sep:.4g}")
+        print(f"the crack band crosses all {len(ys)} rows between the hole and the free edges within |x| <= {W}, "
               f"opened by at least half the end separation {sep:.4g}")
     for x, y, phi in damaged:
         if a.near is None:
