@@ -104,6 +104,19 @@ def fail(msg):
     sys.exit(1)
 
 
+def rows_beside_hole(rows, ux, hole_radius, option):
+    """The end separation (u_x of the right fictitious layer minus the left one), the y of the
+    rows of real particles between the hole and the free edges, and a function giving a row's
+    (x, phi, u_x), sorted by x."""
+    fict_ux = [ux[pid] for pid, (x, y, phi, fic) in rows.items() if fic]
+    if not fict_ux:
+        fail(option + " needs the fictitious end layers (their u_x is the end separation)")
+    ys = sorted({round(y, 9) for (x, y, phi, fic) in rows.values() if not fic and abs(y) > hole_radius})
+    row_of = lambda yr: sorted((x, phi, ux[pid]) for pid, (x, y, phi, fic) in rows.items()
+                               if not fic and abs(round(y, 9) - yr) < 1e-9)
+    return max(fict_ux) - min(fict_ux), ys, row_of
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--hole-radius", type=float, required=True)
@@ -162,14 +175,9 @@ def main():
         print(f"damage symmetric about both axes within {H}")
     if a.crack_to_edges is not None:
         W = a.crack_to_edges
-        fict_ux = [ux[pid] for pid, (x, y, phi, fic) in rows.items() if fic]
-        if not fict_ux:
-            fail("--crack-to-edges needs the fictitious end layers (their u_x is the end separation)")
-        sep = max(fict_ux) - min(fict_ux)
-        ys = sorted({round(y, 9) for (x, y, phi, fic) in rows.values() if not fic and abs(y) > a.hole_radius})
+        sep, ys, row_of = rows_beside_hole(rows, ux, a.hole_radius, "--crack-to-edges")
         for yr in ys:
-            row = sorted((x, phi, ux[pid]) for pid, (x, y, phi, fic) in rows.items()
-                         if not fic and abs(round(y, 9) - yr) < 1e-9)
+            row = row_of(yr)
             best = None
             for (x1, p1, u1), (x2, p2, u2) in zip(row, row[1:]):
                 if abs(x1) > W + 1e-9 or abs(x2) > W + 1e-9:
@@ -187,14 +195,9 @@ def main():
               f"opened by at least half the end separation {sep:.4g}")
     if a.crack_band is not None:
         W = a.crack_band
-        fict_ux = [ux[pid] for pid, (x, y, phi, fic) in rows.items() if fic]
-        if not fict_ux:
-            fail("--crack-band needs the fictitious end layers (their u_x is the end separation)")
-        sep = max(fict_ux) - min(fict_ux)
-        ys = sorted({round(y, 9) for (x, y, phi, fic) in rows.values() if not fic and abs(y) > a.hole_radius})
+        sep, ys, row_of = rows_beside_hole(rows, ux, a.hole_radius, "--crack-band")
         for yr in ys:
-            band = sorted((x, phi, ux[pid]) for pid, (x, y, phi, fic) in rows.items()
-                          if not fic and abs(round(y, 9) - yr) < 1e-9 and abs(x) <= W + 1e-9)
+            band = [p for p in row_of(yr) if abs(p[0]) <= W + 1e-9]
             if not band or max(p for _, p, _ in band) < 0.25:
                 fail(f"no damaged particle (phi >= 0.25) in the row y = {yr} within |x| <= {W}")
             opening = band[-1][2] - band[0][2]
