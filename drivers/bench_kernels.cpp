@@ -148,16 +148,16 @@ int main(int argc, char** argv) {
         const Row r = timeModel(model, u, tangent, n > 200000 ? 3 : 5);
         const double bytesR = bonds * (4 + 24 + 8 + 8 * dim) + (8 + 24 + 8 + 8 * dim);
         const double bytesJ = bonds * (4 + 24 + 8 + 8 * dim + 24 * dim) + (8 + 24 + 8 + 8 * dim * 3);
-        // Memory: the assembled Jacobian as this project's evaluator stored it until session 4
-        // (an owned and an overlapping CRS copy: 8-byte value + 4-byte column index per entry; it
-        // now keeps one copy plus the ghost rows), from the interior row length (an upper bound:
-        // boundary rows are shorter); the matrix-free solve keeps the model (positions, volumes,
-        // families), the neighbour preconditioner matrix (counted with two copies too, as it was
-        // stored until then) and 40 Krylov vectors. docs/performance.md says what this overstates.
+        // Memory on one rank: the assembled Jacobian as the evaluator stores it since session 4
+        // (one owned CRS copy, summed in place; ghost rows, absent on one rank, come on top on
+        // several: 8-byte value + 4-byte column index per entry), from the interior row length
+        // (an upper bound: boundary rows are shorter); the matrix-free solve keeps the model
+        // (positions, volumes, families), the neighbour preconditioner matrix (one copy too) and
+        // 40 Krylov vectors.
         const double rowJ = static_cast<double>(interiorCoupled(d)) * dim;
-        const double bytesAssembled = 2.0 * n * dim * (rowJ * 12.0 + 8.0);
+        const double bytesAssembled = 1.0 * n * dim * (rowJ * 12.0 + 8.0);
         const double bytesModel = n * (24 + 8 + 8 + (bonds * 4)) + n * dim * 8.0 * 4;
-        const double bytesMF = bytesModel + 2.0 * n * dim * ((bonds + 1) * dim * 12.0 + 8.0) + 40.0 * n * dim * 8.0;
+        const double bytesMF = bytesModel + 1.0 * n * dim * ((bonds + 1) * dim * 12.0 + 8.0) + 40.0 * n * dim * 8.0;
         std::printf("%-3d %-6.3f %9lld %7.1f | %9.3f %6.1f | %9.3f %6.1f | %10.3f | %9.1f %9.1f %6.1f\n", dim, factor, n,
                     bonds, 1e6 * r.residual, r.residual / (bytesR / bw), 1e6 * r.jv, r.jv / (bytesJ / bw),
                     1e6 * r.tangent, (bytesAssembled + bytesModel) / 1048576.0, bytesMF / 1048576.0,
