@@ -1058,6 +1058,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   comm->barrier();
 
   if (rank == 0) {
+    const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed
     // Gather per-rank particle CSVs into one file for plotting.
     {
       std::ofstream all(staging + "/fields.csv");
@@ -1135,7 +1136,6 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       j["linear_solves_total"] = solves;
       j["krylov_iterations_total"] = krylov;
       j["linear_failures_total"] = linearFailures;
-      const std::string inexact = inexactSolvesWarning(res.steps);
       if (!inexact.empty()) j["warnings"] = {inexact};
       if (scene.problem->damage) {
         j["broken_bonds_total"] = broken;
@@ -1219,7 +1219,6 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     if (!options.quiet) {
       CoutFormat keep;
       if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
-      const std::string inexact = inexactSolvesWarning(res.steps);
       if (!inexact.empty()) std::cout << "note: " << inexact << "\n";
       std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
                 << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)\n";

@@ -155,9 +155,9 @@ int main(int argc, char** argv) {
         // (positions, volumes, families), the neighbour preconditioner matrix (one copy too) and
         // 40 Krylov vectors.
         const double rowJ = static_cast<double>(interiorCoupled(d)) * dim;
-        const double bytesAssembled = 1.0 * n * dim * (rowJ * 12.0 + 8.0);
+        const double bytesAssembled = n * dim * (rowJ * 12.0 + 8.0);
         const double bytesModel = n * (24 + 8 + 8 + (bonds * 4)) + n * dim * 8.0 * 4;
-        const double bytesMF = bytesModel + 1.0 * n * dim * ((bonds + 1) * dim * 12.0 + 8.0) + 40.0 * n * dim * 8.0;
+        const double bytesMF = bytesModel + n * dim * ((bonds + 1) * dim * 12.0 + 8.0) + 40.0 * n * dim * 8.0;
         std::printf("%-3d %-6.3f %9lld %7.1f | %9.3f %6.1f | %9.3f %6.1f | %10.3f | %9.1f %9.1f %6.1f\n", dim, factor, n,
                     bonds, 1e6 * r.residual, r.residual / (bytesR / bw), 1e6 * r.jv, r.jv / (bytesJ / bw),
                     1e6 * r.tangent, (bytesAssembled + bytesModel) / 1048576.0, bytesMF / 1048576.0,
