@@ -1,6 +1,7 @@
 #include "Simulation.hpp"
 
 #include <Teuchos_CommHelpers.hpp>
+#include <mpi.h>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Thyra_VectorStdOps.hpp>
 #include <algorithm>
@@ -16,10 +17,15 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <spawn.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>  // environ (GNU)
+#include <fcntl.h>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
+#include "perinox/io/OutputFolder.hpp"
 #include "perinox/solver/AdrSolver.hpp"
 #include "perinox/solver/ArcLength.hpp"
 #include "perinox/solver/LinearSolver.hpp"
@@ -51,6 +57,62 @@ class CoutFormat {
 
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// Runs f on every rank (f may do nothing on some). If it throws on any rank, every rank throws
+/// the same OutputPathError (the sentence of the lowest failing rank) once all have finished f,
+/// so no rank is left waiting in a collective for one that threw. For work done by some ranks
+/// only between collectives: writing files, making folders.
+template <class F>
+void agreed(const Teuchos::Comm<int>& comm, F&& f) {
+  std::string msg;
+  try {
+    f();
+  } catch (const fs::filesystem_error& e) {
+    msg = e.code().message() + " at '" + e.path1().string() + "'";
+  } catch (const std::exception& e) {
+    msg = e.what();
+    if (msg.empty()) msg = "unknown error";
+  }
+  const int rank = comm.getRank(), size = comm.getSize();
+  int mine = msg.empty() ? size : rank, first = size;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(first));
+  if (first == size) return;
+  int length = static_cast<int>(msg.size());
+  Teuchos::broadcast(comm, first, Teuchos::outArg(length));
+  msg.resize(length);
+  if (length > 0) Teuchos::broadcast(comm, first, length, msg.data());
+  if (msg.rfind("--", 0) == 0) throw OutputPathError(msg);  // already names its option
+  throw OutputPathError("writing the results failed" + (size > 1 ? " on rank " + std::to_string(first) : std::string()) +
+                        ": " + msg);
+}
+
+/// Tests only: PERINOX_FAULT_WRITE_RANK=r makes rank r's field writer fail, as a full disk or a
+/// vanished folder would, to check that every rank ends with the same sentence.
+void injectedWriteFault(int rank, const std::string& file) {
+  const char* f = std::getenv("PERINOX_FAULT_WRITE_RANK");
+  if (f && *f && std::atoi(f) == rank) throw std::runtime_error("cannot write '" + file + "' (fault injected by PERINOX_FAULT_WRITE_RANK)");
+}
+
+/// Runs a program with arguments (no shell: nothing in them is interpreted), its output into
+/// logFile; returns its exit status (-1 when it could not be started).
+int runProgram(const std::vector<std::string>& argv, const std::string& logFile) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, logFile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 /// Mean displacement of a probe's particles, or the summed reaction, at state x.
@@ -121,6 +183,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   }
   std::vector<PointField> fields{disp, stress, fict, rk};
   if (damage) fields.push_back(dmg);  // only where the effect is on
+  injectedWriteFault(rank, dir + "/fields_" + std::to_string(rank) + ".vtu");
   if (vtk) {
     const std::string piece = "fields_" + std::to_string(rank) + ".vtu";
     writeVtu(dir + "/" + piece, pts, fields);
@@ -217,44 +280,36 @@ struct Checkpoint {
   std::vector<std::pair<long long, long long>> broken;
 };
 
-void writeCheckpoint(const std::string& dir, const nlohmann::json& state, const PeridynamicEvaluator& ev,
+void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const PeridynamicEvaluator& ev,
                      const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious,
                      const Teuchos::Comm<int>& comm) {
   const int rank = comm.getRank();
-  const std::string tmp = dir + ".writing";
-  if (rank == 0) {
-    fs::remove_all(tmp);
-    fs::create_directories(tmp);
-  }
-  comm.barrier();
-  {
+  agreed(comm, [&] {
+    if (rank == 0) openStaging(plan);
+  });
+  agreed(comm, [&] {
     std::ostringstream out;
     out << std::hexfloat;
     const auto xv = ev.ownedFreeValues(x), pv = ev.ownedFreeValues(xPrevious);
     for (std::size_t k = 0; k < xv.size(); ++k) out << "x " << xv[k].first << ' ' << xv[k].second << ' ' << pv[k].second << '\n';
     for (const auto& [a, b] : ev.ownedBrokenBonds()) out << "bond " << a << ' ' << b << '\n';
     for (const auto& [g, v] : ev.ownedFrozenDofs()) out << "frozen " << g << ' ' << v << '\n';
-    writeFileAtomic(tmp + "/rank_" + std::to_string(rank) + ".txt", out.str());
-  }
-  comm.barrier();
-  if (rank == 0) {
+    writeFileAtomic(plan.staging + "/rank_" + std::to_string(rank) + ".txt", out.str());
+  });
+  agreed(comm, [&] {
+    if (rank != 0) return;
     nlohmann::json st = state;
     st["ranks"] = comm.getSize();
-    writeFileAtomic(tmp + "/state.json", st.dump(1) + "\n");
+    writeFileAtomic(plan.staging + "/state.json", st.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     // Replace the previous checkpoint only once the new one is complete; the old one is moved
     // aside first, so a job killed in between leaves DIR.old or DIR, never neither.
-    const std::string old = dir + ".old";
-    fs::remove_all(old);
-    if (fs::exists(dir)) fs::rename(dir, old);
-    fs::rename(tmp, dir);
-    fs::remove_all(old);
-  }
-  comm.barrier();
+    commitFolder(plan);
+  });
 }
 
 /// Reads a checkpoint written for this scene (freeDofs unknowns); throws std::invalid_argument
 /// naming the problem.
-Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs) {
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles) {
   Checkpoint c;
   const std::string where = "checkpoint '" + dir + "'";
   std::ifstream sj(dir + "/state.json");
@@ -264,8 +319,9 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
                                 ")");
   try {
     c.state = nlohmann::json::parse(sj);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(where + ": state.json is not valid JSON (" + e.what() + ")");
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::invalid_argument(where + ": state.json is truncated or damaged (not valid JSON at byte " +
+                                std::to_string(e.byte) + ")");
   }
   if (c.state.value("format", 0) != 1 || !c.state.contains("scene") || !c.state.contains("ranks"))
     throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 1)");
@@ -275,8 +331,8 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
     Teuchos::RCP<Teuchos::ParameterList> pl;
     try {
       pl = Teuchos::getParametersFromXmlString(xml);
-    } catch (const std::exception& e) {
-      throw std::invalid_argument(where + ": its scene is not readable XML (" + e.what() + ")");
+    } catch (const std::exception&) {
+      throw std::invalid_argument(where + ": the scene kept in its state.json is not readable XML (damaged checkpoint)");
     }
     if (pl->isSublist("Solver")) {
       auto& so = pl->sublist("Solver");
@@ -331,11 +387,40 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   }
   // Everything the loop will read, checked now, before any output exists.
   try {
-    for (const char* k : {"step", "lambda", "increment", "last_increment", "stall_breaks", "elapsed_s", "segment"})
-      (void)c.state.at(k).get<double>();
+    for (const char* k : {"step", "lambda", "increment", "last_increment", "stall_breaks", "elapsed_s", "segment"}) {
+      const double v = c.state.at(k).get<double>();
+      if (!std::isfinite(v)) throw std::runtime_error(std::string("'") + k + "' is not a finite number");
+    }
+    // Values a run could have written: a counter is a whole number within its range, a load
+    // factor lies in [0, 1], an increment in (0, 1].
+    auto whole = [&](const char* k, long long lo, long long hi) {
+      const double v = c.state.at(k).get<double>();
+      if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi))
+        throw std::runtime_error(std::string("'") + k + "' = " + c.state.at(k).dump() + " is not a whole number in [" +
+                                 std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    };
+    auto within = [&](const char* k, double lo, double hi, bool openLow) {
+      const double v = c.state.at(k).get<double>();
+      if (v > hi || v < lo || (openLow && v == lo))
+        throw std::runtime_error(std::string("'") + k + "' = " + c.state.at(k).dump() + " lies outside " +
+                                 (openLow ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    };
+    whole("step", 0, 2000000000);
+    whole("stall_breaks", 0, 2000000000);
+    whole("segment", 1, 1000000000);
+    within("lambda", 0.0, 1.0, false);
+    within("increment", 0.0, 1.0, true);
+    within("last_increment", 0.0, 1.0, false);
+    within("elapsed_s", 0.0, 1e12, false);
+    if (c.state.at("steps").size() != c.state.at("step").get<std::size_t>())
+      throw std::runtime_error("it records " + std::to_string(c.state.at("steps").size()) + " steps, not 'step' = " +
+                               c.state.at("step").dump());
     for (const auto& sj : c.state.at("steps")) (void)stepFromJson(sj);
     (void)c.state.at("path_load_factors").get<std::vector<double>>();
-    (void)c.state.at("detached").get<std::vector<long long>>();
+    for (long long id : c.state.at("detached").get<std::vector<long long>>())
+      if (id < 0 || id >= particles)
+        throw std::runtime_error("detached particle " + std::to_string(id) + " is not one of the " +
+                                 std::to_string(particles) + " particles");
     const auto& probes = c.state.at("probes");
     if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
     for (const auto& p : probes) (void)p.get<std::vector<std::pair<double, std::vector<double>>>>();
@@ -368,10 +453,10 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
           c.xPrevious.emplace_back(g, number(v2, ok));
         }
       } else if (kind == "bond") {
-        ok = static_cast<bool>(ls >> g >> h);
+        ok = static_cast<bool>(ls >> g >> h) && g >= 0 && h >= 0 && g < particles && h < particles && g != h;
         if (ok) c.broken.emplace_back(g, h);
       } else if (kind == "frozen") {
-        ok = static_cast<bool>(ls >> g >> v1);
+        ok = static_cast<bool>(ls >> g >> v1) && g >= 0 && g < freeDofs;
         if (ok) c.frozen.emplace_back(g, number(v1, ok));
       } else {
         ok = false;
@@ -594,6 +679,27 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   const int rank = comm->getRank(), nranks = comm->getSize();
   RunResult res;
   res.outputDir = options.outputDir;
+  const bool arcLength = scene.solver.continuation == "Arc Length";
+  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
+  if (arcLength && (checkpoints || !options.restartFrom.empty()))
+    throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
+                                "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
+
+  // Where the results and checkpoints go, checked first (README, "Output folders"): a folder that
+  // is not perinox's, the scene, the checkpoint being resumed, '.', a file or a device is refused
+  // before any work, on every rank with rank 0's sentence.
+  const FolderPlan output = folderNames(options.outputDir, FolderKind::Output, "--output");
+  const std::string checkpointOption = options.checkpointDir.empty() ? "the checkpoint folder" : "--checkpoint-dir";
+  const FolderPlan checkpointFolder = folderNames(
+      options.checkpointDir.empty() ? output.target + ".checkpoint" : options.checkpointDir, FolderKind::Checkpoint, checkpointOption);
+  agreed(*comm, [&] {
+    if (rank != 0) return;
+    std::vector<ProtectedPath> keep{{scene.file, "the scene file"}, {options.restartFrom, "the checkpoint to resume from"}};
+    planFolder(options.outputDir, FolderKind::Output, "--output", keep);
+    if (checkpoints) {
+      checkDistinct(output, planFolder(checkpointFolder.target, FolderKind::Checkpoint, checkpointOption, {keep[0]}));
+    }
+  });
 
   // Everything that can reject the set-up happens before the output folder exists.
   auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
@@ -612,22 +718,29 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   }
   res.particles = scene.problem->disc.size();
   res.dofs = evaluator->numFreeDofs();
-  const bool arcLength = scene.solver.continuation == "Arc Length";
-  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
-  const std::string checkpointDir = options.checkpointDir.empty() ? options.outputDir + ".checkpoint" : options.checkpointDir;
-  if (arcLength && (checkpoints || !options.restartFrom.empty()))
-    throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
-                                "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
   std::optional<Checkpoint> resume;
-  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs);
+  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles);
 
-  const std::string staging = options.outputDir + ".partial";
-  if (rank == 0) {
-    fs::remove_all(staging);
-    fs::create_directories(staging);
-    Teuchos::writeParameterListToXmlFile(*scene.resolved, staging + "/scene.resolved.xml");
-  }
-  comm->barrier();
+  const std::string staging = output.staging;
+  // A run that ends with an error leaves no half-written folder: the staging folder goes with it
+  // (unless it holds finished results that could not be moved into place).
+  bool keepStaging = false;
+  struct StagingGuard {
+    const std::string& path;
+    const bool& keep;
+    bool active;
+    ~StagingGuard() {
+      std::error_code ec;
+      if (active && !keep && fs::is_directory(fs::symlink_status(path, ec))) fs::remove_all(path, ec);
+    }
+  } stagingGuard{staging, keepStaging, rank == 0};
+  agreed(*comm, [&] {
+    if (rank != 0) return;
+    openStaging(output);
+    std::ostringstream xml;
+    Teuchos::writeParameterListToXmlOStream(*scene.resolved, xml);
+    writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
+  });
 
   NewtonOptions nopt;
   nopt.tolerance = scene.solver.tolerance;
@@ -1027,10 +1140,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
         for (const auto& pr : res.probes) probes.push_back(pr.second);
         st["probes"] = probes;
         st["detached"] = evaluator->detachedParticles();
-        writeCheckpoint(checkpointDir, st, *evaluator, *xConverged, *xPrevious, *comm);
+        writeCheckpoint(checkpointFolder, st, *evaluator, *xConverged, *xPrevious, *comm);
         lastCheckpoint = now();
         if (rank == 0 && !options.quiet)
-          std::cout << "  checkpoint after step " << step << " in " << checkpointDir << std::endl;
+          std::cout << "  checkpoint after step " << step << " in " << checkpointFolder.target << std::endl;
       }
     }
   }
@@ -1043,7 +1156,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     res.hasError = true;
     res.errorU = displacementError(*evaluator, scene.reference, u);
   }
-  writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks);
+  agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks); });
   res.wallTime = now() - t0 + elapsedBefore;
   // Peak resident memory: the largest rank's and the sum over ranks (MiB).
   double rss = 0, rssMax = 0, rssSum = 0;
@@ -1057,7 +1170,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, matrixBytes, Teuchos::outArg(matrixBytesAll));
   comm->barrier();
 
-  if (rank == 0) {
+  agreed(*comm, [&] {
+    if (rank != 0) return;
     const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed
     // Gather per-rank particle CSVs into one file for plotting.
     {
@@ -1184,7 +1298,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       writeFileAtomic(staging + "/path.csv", path.str());
     }
     if (res.hasError) j["errors"] = {{"e_u", res.errorU}, {"reference", scene.reference.type}};
-    writeFileAtomic(staging + "/summary.json", j.dump(2) + "\n");
+    writeFileAtomic(staging + "/summary.json", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     writeFileAtomic(staging + "/newton.csv", csv.str());
 
     // The residual table of seed 000's Tables 2-4: one column per step, one row per iteration.
@@ -1208,14 +1322,19 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
     if (scene.output.plots && !options.plotScript.empty()) {
       // Debian's python3 carries python3-matplotlib; another python3 earlier on PATH may not.
+      // Run without a shell: the paths go to python as they are, whatever characters they hold.
       const char* py = std::getenv("PERINOX_PYTHON");
       const std::string python = py && *py ? py : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
-      const std::string cmd = python + " '" + options.plotScript + "' '" + staging + "' > '" + staging + "/plot.log' 2>&1";
-      if (std::system(cmd.c_str()) != 0 && !options.quiet)
+      if (runProgram({python, options.plotScript, staging}, staging + "/plot.log") != 0 && !options.quiet)
         std::cout << "note: plots were not drawn (see plot.log; python3-matplotlib missing?)\n";
     }
-    fs::remove_all(options.outputDir);
-    fs::rename(staging, options.outputDir);
+    try {
+      commitFolder(output);
+    } catch (const OutputPathError&) {
+      keepStaging = true;  // the results are complete: the message says where they are
+      throw;
+    }
+    stagingGuard.active = false;
     if (!options.quiet) {
       CoutFormat keep;
       if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
@@ -1223,8 +1342,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
       std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
                 << " (" << std::fixed << std::setprecision(2) << res.wallTime << " s)\n";
     }
-  }
-  comm->barrier();
+  });
   return res;
 }
 

@@ -10,12 +10,15 @@
 // (the last converged state is written, with the reason in summary.json); 1 internal error.
 #include <Teuchos_DefaultComm.hpp>
 #include <Tpetra_Core.hpp>
+#include <mpi.h>
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "Simulation.hpp"
+#include "perinox/io/OutputFolder.hpp"
 #include "perinox/model/Model.hpp"
 
 namespace {
@@ -35,6 +38,22 @@ int usage(int code) {
   return code;
 }
 
+/// A message as one line: line breaks and runs of blanks become one space, at most 400 characters
+/// (a message is one sentence; this guards against a library's multi-line text).
+std::string oneLine(const std::string& text) {
+  std::string s;
+  for (char c : text) {
+    const bool blank = c == '\n' || c == '\r' || c == '\t' || c == ' ';
+    if (blank) {
+      if (!s.empty() && s.back() != ' ') s += ' ';
+    } else {
+      s += c;
+    }
+  }
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s.size() > 400 ? s.substr(0, 397) + "..." : s;
+}
+
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return v && *v ? std::string(v) : fallback;
@@ -50,12 +69,17 @@ int main(int argc, char** argv) {
   auto comm = Teuchos::DefaultComm<int>::getComm();
   const bool root = comm->getRank() == 0;
   std::vector<std::string> args(argv + 1, argv + argc);
-  if (args.empty()) return root ? usage(2) : 2;
+  auto refuse = [&](const std::string& msg) {
+    if (root) std::cerr << "perinox: " << oneLine(msg) << "\n";
+    return 2;
+  };
+  if (args.empty()) return refuse("no command given; usage: perinox run SCENE.xml [options] (perinox --help lists them)");
   if (args[0] == "schema") {
     if (root) perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
     return 0;
   }
-  if (args[0] != "run" || args.size() < 2) return root ? usage(2) : 2;
+  if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; usage: perinox run SCENE.xml [options] (perinox --help lists them)");
+  if (args.size() < 2) return refuse("'perinox run' needs a scene file: perinox run SCENE.xml [options]");
 
   std::string scenePath = args[1];
   std::vector<std::string> overrides;
@@ -78,10 +102,8 @@ int main(int argc, char** argv) {
         used = 0;
       }
       const bool steps = flag == "--checkpoint-steps";
-      if (used != text.size() || !(v > 0) || (steps && v != static_cast<int>(v))) {
-        if (root) std::cerr << "perinox: " << flag << " needs a positive " << (steps ? "whole number" : "number")
-                            << ", not '" << text << "'\n";
-        return 2;
+      if (used != text.size() || !(v > 0) || !std::isfinite(v) || (steps && (v > 1e9 || v != static_cast<int>(v)))) {
+        return refuse(flag + " needs a positive " + (steps ? "whole number" : "number") + ", not '" + text.substr(0, 40) + "'");
       }
       if (steps)
         opt.checkpointSteps = static_cast<int>(v);
@@ -91,9 +113,12 @@ int main(int argc, char** argv) {
       opt.checkpointDir = args[++i];
     } else if (args[i] == "--restart" && i + 1 < args.size()) {
       opt.restartFrom = args[++i];
+    } else if (args[i].rfind("--", 0) == 0 && i + 1 == args.size() &&
+               (args[i] == "--set" || args[i] == "--output" || args[i] == "--checkpoint-dir" || args[i] == "--restart" ||
+                args[i] == "--checkpoint-steps" || args[i] == "--checkpoint-seconds")) {
+      return refuse(args[i] + " needs a value");
     } else {
-      if (root) std::cerr << "perinox: unknown argument '" << args[i] << "'\n";
-      return root ? usage(2) : 2;
+      return refuse("unknown argument '" + args[i].substr(0, 60) + "' (perinox --help lists the options)");
     }
   }
   if (opt.outputDir.empty()) {
@@ -108,20 +133,24 @@ int main(int argc, char** argv) {
   try {
     scene = perinox::loadScene(scenePath, overrides, xmlDir + "/solvers");
   } catch (const std::exception& e) {
-    if (root) std::cerr << "perinox: error: " << e.what() << "\n";
-    return 2;
+    return refuse(std::string("error: ") + e.what());
   }
+  // Errors from here on: those of the set-up and the agreed ones (every rank throws the same
+  // sentence) end every rank with one sentence; anything else on one rank alone could leave the
+  // others waiting in a collective, so it ends the whole job.
   try {
     const auto r = perinox::runScene(scene, comm, opt);
     return r.converged ? 0 : 3;
+  } catch (const perinox::OutputPathError& e) {
+    return refuse(std::string("error: ") + e.what());
   } catch (const perinox::EvaluationError& e) {
-    if (root) std::cerr << "perinox: error in " << scenePath << ": " << e.what() << "\n";
-    return 2;
+    return refuse("error in " + scenePath + ": " + e.what());
   } catch (const std::invalid_argument& e) {
-    if (root) std::cerr << "perinox: error in " << scenePath << ": " << e.what() << "\n";
-    return 2;
+    return refuse("error in " + scenePath + ": " + e.what());
   } catch (const std::exception& e) {
-    if (root) std::cerr << "perinox: internal error: " << e.what() << "\n";
+    std::cerr << "perinox: internal error" << (comm->getSize() > 1 ? " on rank " + std::to_string(comm->getRank()) : std::string())
+              << ": " << oneLine(e.what()) << "\n";
+    if (comm->getSize() > 1) MPI_Abort(MPI_COMM_WORLD, 1);
     return 1;
   }
 }

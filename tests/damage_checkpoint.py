@@ -3,6 +3,7 @@
 
     damage_checkpoint.py SOURCE_DIR DEST_DIR KEY      remove KEY from state.json
     damage_checkpoint.py SOURCE_DIR DEST_DIR :value   replace the first displacement in rank_0.txt by a non-number
+    damage_checkpoint.py SOURCE_DIR DEST_DIR KEY=JSON set KEY of state.json to a value no run writes
 """
 import json
 import shutil
@@ -26,6 +27,15 @@ if what == ":value":
 path = dst + "/state.json"
 with open(path) as f:
     state = json.load(f)
+if "=" in what:
+    key, value = what.split("=", 1)
+    if key not in state:
+        sys.exit(f"FAILED: {path} has no key {key!r} to set")
+    state[key] = json.loads(value)
+    with open(path, "w") as f:
+        json.dump(state, f)
+    print(f"set {key!r} to {value} in {path}")
+    sys.exit(0)
 if what not in state:
     sys.exit(f"FAILED: {path} has no key {what!r} to remove")
 del state[what]
