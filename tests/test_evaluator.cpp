@@ -8,6 +8,8 @@
 #include <Thyra_VectorStdOps.hpp>
 #include <Tpetra_Core.hpp>
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
@@ -199,4 +201,58 @@ TEST(EvaluatorReaction, KeptNormMatchesFreshEvaluation) {
   check(*x2, "another state");
   ev->setLoadFactor(0.3);
   check(*x1, "the evaluated state at another load factor");
+}
+
+// A problem built in C++ is checked as a scene is: one sentence naming the field, thrown by the
+// evaluator's constructor before any map or graph is built (the same on every rank).
+TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  auto expectRefused = [&](const std::shared_ptr<ProblemSpec>& P, const std::string& part) {
+    try {
+      PeridynamicEvaluator ev(comm, P);
+      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(part), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  };
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->bodyForce[3] = std::nan("");
+    expectRefused(P, "bodyForce[3] = nan is not finite");
+  }
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->prescribed.pop_back();
+    expectRefused(P, "prescribed has");
+  }
+  {
+    auto P = makeProblem(3, 1.015, 0.1, false);
+    P->disc.X[5][1] = std::numeric_limits<double>::infinity();
+    expectRefused(P, "disc.X[5] is not finite");
+  }
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->material.E = -1;
+    expectRefused(P, "material.E = -1");
+  }
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->disc.familyOffset.clear();
+    expectRefused(P, "no families");
+  }
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->damage = true;
+    P->damageSpec.sMin = 0.003;  // above sCr = 0.002
+    expectRefused(P, "0 < sMin < sCr");
+  }
+  {
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    P->fixedMask[0] = 4;  // component z in 2D
+    expectRefused(P, "fixedMask[0]");
+  }
+  // The unchanged problem is accepted.
+  EXPECT_NO_THROW(PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, true)));
 }

@@ -195,6 +195,8 @@ class DifferenceJacobianOperator final : public Tpetra::Operator<double, LO, GO,
 PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
                                            std::shared_ptr<const ProblemSpec> problem)
     : comm_(comm), problem_(std::move(problem)) {
+  if (!problem_) throw std::invalid_argument("ProblemSpec: the evaluator was given no problem");
+  validateProblem(*problem_);
   const ProblemSpec& P = *problem_;
   const long long n = P.disc.size();
   begin_ = partitionBegin(n, comm_->getSize(), comm_->getRank());

@@ -53,4 +53,11 @@ struct ProblemSpec {
   }
 };
 
+/// Checks a problem built in C++ (or from a scene) for what the evaluator cannot work with: array
+/// sizes against the particle count and dimension, finite coordinates, volumes, loads and material
+/// constants, a horizon of at least one spacing, consistent effect parameters. Throws
+/// std::invalid_argument with one sentence naming the field ("ProblemSpec: ...") otherwise. The
+/// evaluator's constructor calls it, so a host program gets the errors a scene gets.
+void validateProblem(const ProblemSpec& problem);
+
 }  // namespace perinox

@@ -1,0 +1,82 @@
+// ProblemSpec's own checks (Problem.hpp), free of Trilinos headers.
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "perinox/evaluator/Problem.hpp"
+
+namespace perinox {
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& what) { throw std::invalid_argument("ProblemSpec: " + what); }
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+/// Every entry of v finite, and v of the expected size (any size when expected < 0).
+void finiteArray(const std::vector<double>& v, long long expected, const char* name, bool mayBeEmpty = false) {
+  if (!(mayBeEmpty && v.empty()) && expected >= 0 && static_cast<long long>(v.size()) != expected)
+    refuse(std::string(name) + " has " + std::to_string(v.size()) + " entries, not " + std::to_string(expected));
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i])) refuse(std::string(name) + "[" + std::to_string(i) + "] = " + number(v[i]) + " is not finite");
+}
+
+void positive(double v, const char* name) {
+  if (!(v > 0) || !std::isfinite(v)) refuse(std::string(name) + " = " + number(v) + " must be a positive finite number");
+}
+
+}  // namespace
+
+void validateProblem(const ProblemSpec& P) {
+  const Discretization& d = P.disc;
+  const int D = d.dim;
+  if (D < 1 || D > 3) refuse("disc.dim = " + std::to_string(D) + " must be 1, 2 or 3");
+  if (P.material.dim != D) refuse("material.dim = " + std::to_string(P.material.dim) + " differs from disc.dim = " + std::to_string(D));
+  const long long n = d.size();
+  if (n == 0) refuse("the discretisation has no particles");
+  positive(d.dx, "disc.dx");
+  positive(d.thickness, "disc.thickness");
+  if (!std::isfinite(d.horizon) || d.horizon < d.dx * (1 - 1e-12))
+    refuse("disc.horizon = " + number(d.horizon) + " must be finite and at least the spacing disc.dx = " + number(d.dx));
+  if (static_cast<long long>(d.volume.size()) != n || static_cast<long long>(d.fictitious.size()) != n)
+    refuse("disc.volume and disc.fictitious need one entry per particle (" + std::to_string(n) + ")");
+  if (static_cast<long long>(d.familyOffset.size()) != n + 1)
+    refuse("disc has no families for its particles (call buildFamilies)");
+  for (long long i = 0; i < n; ++i) {
+    if (!d.X[i].allFinite()) refuse("disc.X[" + std::to_string(i) + "] is not finite");
+    if (!(d.volume[i] > 0) || !std::isfinite(d.volume[i]))
+      refuse("disc.volume[" + std::to_string(i) + "] = " + number(d.volume[i]) + " must be a positive finite number");
+  }
+  positive(P.material.E, "material.E");
+  if (!(P.material.nu > -1.0 && P.material.nu < 0.5))
+    refuse("material.nu = " + number(P.material.nu) + " must satisfy -1 < nu < 0.5");
+  if (P.fixedMask.size() != static_cast<std::size_t>(n)) refuse("fixedMask needs one entry per particle (" + std::to_string(n) + ")");
+  for (long long i = 0; i < n; ++i)
+    if (P.fixedMask[i] >> D) refuse("fixedMask[" + std::to_string(i) + "] names a component beyond the dimension");
+  finiteArray(P.prescribed, n * D, "prescribed");
+  finiteArray(P.bodyForce, n * D, "bodyForce");
+  finiteArray(P.modulusScale, n, "modulusScale", true);
+  for (double s : P.modulusScale)
+    if (!(s > 0)) refuse("modulusScale holds " + number(s) + "; every E_i / E must be positive");
+  if (P.stabilization) {
+    if (!(P.stab.G >= 0) || !std::isfinite(P.stab.G)) refuse("stab.G = " + number(P.stab.G) + " must be finite and >= 0");
+    if (!std::isfinite(P.stab.C) || P.stab.C < 0) refuse("stab.C = " + number(P.stab.C) + " must be finite and >= 0 (micromodulusC gives it)");
+  }
+  if (P.control && (!std::isfinite(P.controlSpec.C) || P.controlSpec.C < 0))
+    refuse("controlSpec.C = " + number(P.controlSpec.C) + " must be finite and >= 0");
+  if (P.damage) {
+    const auto& s = P.damageSpec;
+    if (!(s.sMin > 0 && s.sMin < s.sCr) || !std::isfinite(s.sCr))
+      refuse("damageSpec needs 0 < sMin < sCr (sMin = " + number(s.sMin) + ", sCr = " + number(s.sCr) + ")");
+    positive(s.beta, "damageSpec.beta");
+  }
+  if (!std::isfinite(P.rotation.angle) || !P.rotation.center.allFinite() || !P.rotation.axis.allFinite())
+    refuse("rotation has a non-finite angle, centre or axis");
+  if (P.rotates() && std::abs(P.rotation.axis.norm() - 1.0) > 1e-9) refuse("rotation.axis must be a unit vector");
+}
+
+}  // namespace perinox
