@@ -63,8 +63,23 @@ std::string envOr(const char* name, const std::string& fallback) {
 
 int main(int argc, char** argv) {
   // Before Kokkos sees the arguments: it answers --help with its own options.
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") return usage(0);
+  // Kokkos' own options are refused here too (perinox runs Kokkos' Serial back end and takes
+  // none of them): Kokkos would otherwise act on them, or print pages of help, before perinox could
+  // say anything. MPI is not up yet, so the launcher's rank decides who speaks.
+  const char* launcherRank = std::getenv("OMPI_COMM_WORLD_RANK");
+  const bool speaker = !launcherRank || std::string(launcherRank) == "0";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") return speaker ? usage(0) : 0;
+    for (const char* k : {"--kokkos", "--threads", "--numa", "--device-id", "--num-devices", "--tune-internals",
+                          "--disable-warnings", "--tools-"})
+      if (a.rfind(k, 0) == 0) {
+        if (speaker)
+          std::cerr << "perinox: '" << oneLine(a.substr(0, 60)) << "' is a Kokkos option, which perinox does not take "
+                    << "(it runs Kokkos' Serial back end; perinox --help lists its options)\n";
+        return 2;
+      }
+  }
   Tpetra::ScopeGuard mpi(&argc, &argv);
   auto comm = Teuchos::DefaultComm<int>::getComm();
   const bool root = comm->getRank() == 0;
