@@ -29,6 +29,7 @@
 #include "perinox/solver/AdrSolver.hpp"
 #include "perinox/solver/ArcLength.hpp"
 #include "perinox/solver/LinearSolver.hpp"
+#include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
 
 namespace perinox {
@@ -701,7 +702,11 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     }
   });
 
-  // Everything that can reject the set-up happens before the output folder exists.
+  // Everything that can reject the set-up happens before the output folder exists: the linear
+  // solver's list first (a misspelt Belos, Ifpack2 or MueLu key would be ignored by Trilinos).
+  validateLinearSolverList(*scene.solver.linearSolver, scene.solver.linearSolverName == "custom"
+                                                           ? std::string()
+                                                           : "preset '" + scene.solver.linearSolverName + "'");
   auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
   const auto linearParams = Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver));
   if (scene.solver.jacobian == "Assembled" || scene.solver.method != "Newton") {
