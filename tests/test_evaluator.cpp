@@ -256,3 +256,76 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
   // The unchanged problem is accepted.
   EXPECT_NO_THROW(PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, true)));
 }
+
+// The load factor as the model parameter p(0): an evaluation given p(0) = lambda equals one at
+// setLoadFactor(lambda), and DfDp(0) passes a Taylor test in lambda: the remainder
+// |f(lambda + h) - f(lambda) - h DfDp| falls like h^2 with prescribed displacements (a smooth, nonlinear
+// function of lambda through u) and vanishes to round-off for dead loads (f is affine in lambda).
+TEST(LoadFactorParameter, EvaluationWithPAndDfDpTaylorTest) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  for (const bool prescribed : {true, false}) {
+    auto P = makeProblem(2, 3.015, 0.1, false);
+    if (!prescribed) std::fill(P->prescribed.begin(), P->prescribed.end(), 0.0);
+    auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, P));
+    ASSERT_EQ(ev->createInArgs().Np(), 1);
+    EXPECT_EQ((*ev->get_p_names(0))[0], "Load Factor");
+    auto x = Thyra::createMember(ev->get_x_space());
+    fill(*x, 7, 1e-3);
+    auto residual = [&](double lambda) {
+      auto in = ev->createInArgs();
+      in.set_x(x);
+      auto p = Thyra::createMember(ev->get_p_space(0));
+      Thyra::set_ele(0, lambda, p.ptr());
+      in.set_p(0, p);
+      auto out = ev->createOutArgs();
+      auto f = Thyra::createMember(ev->get_f_space());
+      out.set_f(f);
+      ev->evalModel(in, out);
+      return f;
+    };
+    const double lambda = 0.6;
+    auto f0 = residual(lambda);
+    // The same as setting the load factor on the evaluator (and p set it as the current one).
+    EXPECT_DOUBLE_EQ(ev->loadFactor(), lambda);
+    {
+      ev->setLoadFactor(lambda);
+      auto in = ev->createInArgs();
+      in.set_x(x);
+      auto out = ev->createOutArgs();
+      auto f = Thyra::createMember(ev->get_f_space());
+      out.set_f(f);
+      ev->evalModel(in, out);
+      Thyra::Vp_StV(f.ptr(), -1.0, *f0);
+      EXPECT_EQ(Thyra::norm_inf(*f), 0.0);
+    }
+    auto dfdp = Thyra::createMembers(ev->get_f_space(), 1);
+    {
+      auto in = ev->createInArgs();
+      in.set_x(x);
+      auto p = Thyra::createMember(ev->get_p_space(0));
+      Thyra::set_ele(0, lambda, p.ptr());
+      in.set_p(0, p);
+      auto out = ev->createOutArgs();
+      ASSERT_TRUE(out.supports(Thyra::ModelEvaluatorBase::OUT_ARG_DfDp, 0).supports(Thyra::ModelEvaluatorBase::DERIV_MV_BY_COL));
+      out.set_DfDp(0, Thyra::ModelEvaluatorBase::Derivative<double>(dfdp, Thyra::ModelEvaluatorBase::DERIV_MV_BY_COL));
+      ev->evalModel(in, out);
+    }
+    const double scale = Thyra::norm_2(*dfdp->col(0));
+    ASSERT_GT(scale, 0.0);
+    std::vector<double> remainder;
+    for (double h : {1e-2, 5e-3, 2.5e-3}) {
+      auto fh = residual(lambda + h);
+      Thyra::Vp_StV(fh.ptr(), -1.0, *f0);
+      Thyra::Vp_StV(fh.ptr(), -h, *dfdp->col(0));
+      remainder.push_back(Thyra::norm_2(*fh) / (h * scale));
+    }
+    if (prescribed) {
+      // First-order remainder relative to h |DfDp| halves with h (second order overall).
+      EXPECT_GT(remainder[0], 1e-9);
+      EXPECT_NEAR(remainder[0] / remainder[1], 2.0, 0.2);
+      EXPECT_NEAR(remainder[1] / remainder[2], 2.0, 0.2);
+    } else {
+      for (double r : remainder) EXPECT_LT(r, 1e-11);
+    }
+  }
+}

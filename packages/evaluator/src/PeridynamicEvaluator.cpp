@@ -238,10 +238,9 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
     roundoffScale_ = std::numeric_limits<double>::epsilon() * P.material.E * std::sqrt(g2);
   }
   xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(ownedFree_);
-  MEB::InArgsSetup<double> in;
-  in.setModelEvalDescription("perinox peridynamics");
-  in.setSupports(MEB::IN_ARG_x);
-  nominal_ = in;
+  // The load factor: one value, replicated on every rank.
+  pSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(Tpetra::createLocalMapWithNode<LO, GO, Node>(1, comm_));
+  nominal_ = createInArgs();
   auto x0 = Thyra::createMember(xSpace_);
   Thyra::assign(x0.ptr(), 0.0);
   nominal_.set_x(x0);
@@ -404,13 +403,55 @@ const PeridynamicEvaluator::Graphs& PeridynamicEvaluator::graphs(bool neighbours
   return g;
 }
 
-MEB::InArgs<double> PeridynamicEvaluator::getNominalValues() const { return nominal_; }
+MEB::InArgs<double> PeridynamicEvaluator::getNominalValues() const {
+  MEB::InArgs<double> nominal = nominal_;
+  auto p = Thyra::createMember(pSpace_);
+  Thyra::set_ele(0, lambda_, p.ptr());
+  nominal.set_p(0, p);
+  return nominal;
+}
 
 MEB::InArgs<double> PeridynamicEvaluator::createInArgs() const {
   MEB::InArgsSetup<double> in;
   in.setModelEvalDescription("perinox peridynamics");
+  in.set_Np(1);
   in.setSupports(MEB::IN_ARG_x);
   return in;
+}
+
+Teuchos::RCP<const Thyra::VectorSpaceBase<double>> PeridynamicEvaluator::get_p_space(int l) const {
+  TEUCHOS_TEST_FOR_EXCEPTION(l != 0, std::invalid_argument, "perinox's evaluator has one parameter (p(0), the load factor), not p(" << l << ")");
+  return pSpace_;
+}
+
+Teuchos::RCP<const Teuchos::Array<std::string>> PeridynamicEvaluator::get_p_names(int l) const {
+  TEUCHOS_TEST_FOR_EXCEPTION(l != 0, std::invalid_argument, "perinox's evaluator has one parameter (p(0), the load factor), not p(" << l << ")");
+  return Teuchos::rcp(new Teuchos::Array<std::string>(1, "Load Factor"));
+}
+
+void PeridynamicEvaluator::loadDerivative(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& fl) const {
+  const double lambda = lambda_;
+  auto fm = fl.clone_v();
+  auto residualAt = [&](double l, Thyra::VectorBase<double>& f) {
+    lambda_ = l;
+    auto in = createInArgs();
+    in.set_x(Teuchos::rcpFromRef(x));
+    auto out = createOutArgs();
+    out.set_f(Teuchos::rcpFromRef(f));
+    evalModel(in, out);
+  };
+  double h = 0.5;  // dead loads: f is linear in lambda, f(1) - f(0) exactly
+  if (problem_->prescribesDisplacement()) {
+    h = 1e-6 * std::max(1.0, std::abs(lambda));
+    residualAt(lambda + h, fl);
+    residualAt(lambda - h, *fm);
+  } else {
+    residualAt(1.0, fl);
+    residualAt(0.0, *fm);
+  }
+  lambda_ = lambda;
+  Thyra::Vp_StV(Teuchos::ptrFromRef(fl), -1.0, *fm);
+  if (problem_->prescribesDisplacement()) Thyra::scale(0.5 / h, Teuchos::ptrFromRef(fl));
 }
 
 MEB::OutArgs<double> PeridynamicEvaluator::createOutArgsImpl() const {
@@ -419,6 +460,8 @@ MEB::OutArgs<double> PeridynamicEvaluator::createOutArgsImpl() const {
   out.setSupports(MEB::OUT_ARG_f);
   out.setSupports(MEB::OUT_ARG_W_op);
   if (!precFactory_.is_null()) out.setSupports(MEB::OUT_ARG_W_prec);
+  out.set_Np_Ng(1, 0);
+  out.setSupports(MEB::OUT_ARG_DfDp, 0, MEB::DerivativeSupport(MEB::DERIV_MV_BY_COL));
   return out;
 }
 
@@ -673,6 +716,11 @@ void PeridynamicEvaluator::applyJacobian(const std::vector<double>& u, const dou
 
 void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const MEB::OutArgs<double>& out) const {
   const auto x = in.get_x();
+  if (in.Np() > 0 && !in.get_p(0).is_null()) lambda_ = Thyra::get_ele(*in.get_p(0), 0);
+  if (out.Np() > 0) {
+    const auto dfdp = out.get_DfDp(0).getMultiVector();
+    if (!dfdp.is_null()) loadDerivative(*x, *dfdp->col(0));
+  }
   const auto f = out.get_f();
   const auto Wop = out.get_W_op();
   Teuchos::RCP<Thyra::PreconditionerBase<double>> Wprec;

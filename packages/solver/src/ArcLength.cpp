@@ -61,26 +61,11 @@ bool solve(const Thyra::LinearOpWithSolveBase<double>& A, const Vec& b, Vec& y, 
 }  // namespace
 
 ArcLengthSolver::ArcLengthSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const ArcLengthOptions& options)
-    : ev_(std::move(evaluator)), opt_(options), deadLoad_(!ev_->problem().prescribesDisplacement()) {}
+    : ev_(std::move(evaluator)), opt_(options) {}
 
 void ArcLengthSolver::loadDerivative(const Vec& x, double lambda, Vec& fl) const {
-  auto fm = fl.clone_v();
-  if (deadLoad_) {
-    ev_->setLoadFactor(1.0);
-    evaluate(*ev_, x, &fl, nullptr);
-    ev_->setLoadFactor(0.0);
-    evaluate(*ev_, x, fm.get(), nullptr);
-    Thyra::Vp_StV(Teuchos::ptrFromRef(fl), -1.0, *fm);
-  } else {
-    const double h = 1e-6 * std::max(1.0, std::abs(lambda));
-    ev_->setLoadFactor(lambda + h);
-    evaluate(*ev_, x, &fl, nullptr);
-    ev_->setLoadFactor(lambda - h);
-    evaluate(*ev_, x, fm.get(), nullptr);
-    Thyra::Vp_StV(Teuchos::ptrFromRef(fl), -1.0, *fm);
-    Thyra::scale(0.5 / h, Teuchos::ptrFromRef(fl));
-  }
   ev_->setLoadFactor(lambda);
+  ev_->loadDerivative(x, fl);
 }
 
 std::string ArcLengthSolver::tangent(const Vec& x, double lambda, Vec& z) const {

@@ -46,8 +46,18 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
                        std::shared_ptr<const ProblemSpec> problem);
 
   // --- loading ---
+  /// The load factor lambda is the model's parameter p(0) (one value, "Load Factor"; DfDp(0) =
+  /// df/dlambda is supported). An evaluation given p(0) evaluates at that load factor and makes it
+  /// the current one; without p(0) the current one is used (set here, or by the last evaluation
+  /// with p). The diagnostics (external-force and reaction norms, displacements, damage) use the
+  /// current one.
   void setLoadFactor(double lambda) { lambda_ = lambda; }
   double loadFactor() const { return lambda_; }
+  /// df/dlambda at x and the current load factor, on the owned free DOFs (what DfDp(0) returns).
+  /// Dead loads only (every prescribed value zero): exactly f(x, 1) - f(x, 0) = -R f_ext. With
+  /// prescribed displacements: the central difference (f(x, lambda + h) - f(x, lambda - h)) / 2h,
+  /// h = 1e-6 max(1, |lambda|) (f is smooth in lambda: truncation O(h^2), rounding eps |f_int| / h).
+  void loadDerivative(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& dfdl) const;
 
   // --- Thyra ---
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_x_space() const override { return xSpace_; }
@@ -73,6 +83,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// Rigid-body modes on the owned free DOFs (1 in 1D, 3 in 2D, 6 in 3D).
   Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> rigidBodyModes() const;
   Thyra::ModelEvaluatorBase::InArgs<double> createInArgs() const override;
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_p_space(int l) const override;
+  Teuchos::RCP<const Teuchos::Array<std::string>> get_p_names(int l) const override;
 
   // --- diagnostics and output ---
   /// |lambda f_ext|_2 over free DOFs (global).
@@ -198,7 +210,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   std::shared_ptr<const ProblemSpec> problem_;
   std::unique_ptr<Model> model_;
   long long begin_ = 0, end_ = 0;
-  double lambda_ = 0.0;
+  mutable double lambda_ = 0.0;  // the current load factor (an evaluation with p(0) sets it)
   long long numFree_ = 0;
   std::vector<long long> freeId_;       // replicated: (particle*dim + c) -> free id or -1
   std::vector<int> overlapFreeLid_;     // local (particle*dim + c) -> overlapFree lid or -1
@@ -214,7 +226,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   double frozenStiffness_ = 1.0;
   double roundoffScale_ = 0.0;
 
-  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_;
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_, pSpace_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> wFactory_;
   Thyra::ModelEvaluatorBase::InArgs<double> nominal_;
 };

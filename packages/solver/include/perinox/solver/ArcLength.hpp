@@ -45,10 +45,8 @@ class ArcLengthSolver {
  public:
   ArcLengthSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const ArcLengthOptions& options);
 
-  /// df/dlambda at (x, lambda). Dead loads only (every prescribed value zero): exactly
-  /// f(x, 1) - f(x, 0) = -f_ext. With non-zero prescribed displacements: the central difference
-  /// (f(x, lambda + h) - f(x, lambda - h)) / 2h, h = 1e-6 max(1, |lambda|) (f is smooth in lambda;
-  /// truncation O(h^2), rounding eps |f_int| / h). Leaves the evaluator at lambda.
+  /// df/dlambda at (x, lambda): the evaluator's DfDp (PeridynamicEvaluator::loadDerivative).
+  /// Leaves the evaluator at lambda.
   void loadDerivative(const Thyra::VectorBase<double>& x, double lambda, Thyra::VectorBase<double>& fl) const;
 
   /// Tangent of the path at an equilibrium: z = dx/dlambda from J z = -df/dlambda.
@@ -70,7 +68,6 @@ class ArcLengthSolver {
   mutable long long correctorIterations_ = 0;
   Teuchos::RCP<PeridynamicEvaluator> ev_;
   ArcLengthOptions opt_;
-  bool deadLoad_ = true;
 };
 
 }  // namespace perinox
