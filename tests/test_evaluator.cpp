@@ -271,12 +271,16 @@ TEST(LoadFactorParameter, EvaluationWithPAndDfDpTaylorTest) {
     EXPECT_EQ((*ev->get_p_names(0))[0], "Load Factor");
     auto x = Thyra::createMember(ev->get_x_space());
     fill(*x, 7, 1e-3);
-    auto residual = [&](double lambda) {
+    auto inAt = [&](double lambda) {
       auto in = ev->createInArgs();
       in.set_x(x);
       auto p = Thyra::createMember(ev->get_p_space(0));
       Thyra::set_ele(0, lambda, p.ptr());
       in.set_p(0, p);
+      return in;
+    };
+    auto residual = [&](double lambda) {
+      auto in = inAt(lambda);
       auto out = ev->createOutArgs();
       auto f = Thyra::createMember(ev->get_f_space());
       out.set_f(f);
@@ -300,11 +304,7 @@ TEST(LoadFactorParameter, EvaluationWithPAndDfDpTaylorTest) {
     }
     auto dfdp = Thyra::createMembers(ev->get_f_space(), 1);
     {
-      auto in = ev->createInArgs();
-      in.set_x(x);
-      auto p = Thyra::createMember(ev->get_p_space(0));
-      Thyra::set_ele(0, lambda, p.ptr());
-      in.set_p(0, p);
+      auto in = inAt(lambda);
       auto out = ev->createOutArgs();
       ASSERT_TRUE(out.supports(Thyra::ModelEvaluatorBase::OUT_ARG_DfDp, 0).supports(Thyra::ModelEvaluatorBase::DERIV_MV_BY_COL));
       out.set_DfDp(0, Thyra::ModelEvaluatorBase::Derivative<double>(dfdp, Thyra::ModelEvaluatorBase::DERIV_MV_BY_COL));
