@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/solver/NoxExtensions.hpp"
 
 namespace perinox {
 
@@ -41,141 +42,108 @@ std::string stagnationDiagnosis(const std::vector<double>& r, int window) {
   return s.str();
 }
 
-namespace {
-
 /// NOX's Thyra group, counting the Newton systems its linear solver did not solve (Belos
 /// reports SOLVE_STATUS_UNCONVERGED at its iteration limit or on breakdown; NOX then carries
 /// on with the inexact direction because of "Rescue Bad Newton Solve").
-class RecordingGroup final : public NOX::Thyra::Group {
- public:
-  using NOX::Thyra::Group::Group;
-  /// Copies (the trust-region solvers compute directions on them) share the counts.
-  RecordingGroup(const RecordingGroup& source, NOX::CopyType type)
-      : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_), stats_(source.stats_) {}
-  NOX::Abstract::Group::ReturnType computeNewton(Teuchos::ParameterList& p) override {
-    last_linear_solve_num_iters_ = 0;  // direct solvers leave it untouched
-    const auto st = NOX::Thyra::Group::computeNewton(p);
-    ++stats_->counts.solves;
-    stats_->counts.krylovIterations += std::max(0, last_linear_solve_num_iters_);
-    // A solve counts as failed when its status is not Ok and its achieved relative residual is
-    // above the request (Belos may flag "unconverged" after reaching it; see ArcLength.cpp).
-    const bool bad = st != NOX::Abstract::Group::Ok || last_linear_solve_status_ != NOX::Abstract::Group::Ok;
-    if (bad && !(last_linear_solve_achieved_tol_ >= 0 && last_linear_solve_achieved_tol_ <= tolerance_)) {
-      ++stats_->failures;
-      stats_->lastTol = last_linear_solve_achieved_tol_;
-      stats_->lastIters = last_linear_solve_num_iters_;
-    }
-    return st;
-  }
-  /// Steepest-descent direction for the trust-region solvers: g = J^T F. NOX's Thyra group
-  /// does not implement it; the assembled Jacobian supports the transpose product.
-  NOX::Abstract::Group::ReturnType computeGradient() override {
-    if (is_valid_gradient_dir_) return NOX::Abstract::Group::Ok;
-    if (!is_valid_f_ || !is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS))
-      return NOX::Abstract::Group::BadDependency;
-    ::Thyra::apply(*lop_, ::Thyra::TRANS, f_vec_->getThyraVector(), gradient_vec_->getThyraRCPVector().ptr());
-    is_valid_gradient_dir_ = true;
-    return NOX::Abstract::Group::Ok;
-  }
-  /// J v with the Jacobian operator of this group's last computeJacobian. NOX's version refuses
-  /// when another group copy holds the shared solver object, which the trust-region solvers
-  /// provoke by copying groups between the Newton and Cauchy directions.
-  NOX::Abstract::Group::ReturnType applyJacobian(const NOX::Abstract::Vector& in, NOX::Abstract::Vector& out) const override {
-    if (!is_valid_jacobian_) return NOX::Abstract::Group::BadDependency;
-    ::Thyra::apply(*lop_, ::Thyra::NOTRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
-                   dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
-    return NOX::Abstract::Group::Ok;
-  }
-  NOX::Abstract::Group::ReturnType applyJacobianTranspose(const NOX::Abstract::Vector& in, NOX::Abstract::Vector& out) const override {
-    if (!is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS)) return NOX::Abstract::Group::BadDependency;
-    ::Thyra::apply(*lop_, ::Thyra::TRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
-                   dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
-    return NOX::Abstract::Group::Ok;
-  }
-  Teuchos::RCP<NOX::Abstract::Group> clone(NOX::CopyType type) const override {
-    return Teuchos::rcp(new RecordingGroup(*this, type));
-  }
-  void setTolerance(double t) { tolerance_ = t; }
-  int failures() const { return stats_->failures; }
-  double lastAchieved() const { return stats_->lastTol; }
-  int lastIterations() const { return stats_->lastIters; }
-  const LinearSolveCounts& counts() const { return stats_->counts; }
+CountingGroup::CountingGroup(const CountingGroup& source, NOX::CopyType type)
+    : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_), stats_(source.stats_) {}
 
- private:
-  struct Stats {
-    int failures = 0;
-    double lastTol = 0;
-    int lastIters = 0;
-    LinearSolveCounts counts;
-  };
-  double tolerance_ = 0;
-  std::shared_ptr<Stats> stats_ = std::make_shared<Stats>();
-};
+NOX::Abstract::Group::ReturnType CountingGroup::computeNewton(Teuchos::ParameterList& p) {
+  last_linear_solve_num_iters_ = 0;  // direct solvers leave it untouched
+  const auto st = NOX::Thyra::Group::computeNewton(p);
+  ++stats_->counts.solves;
+  stats_->counts.krylovIterations += std::max(0, last_linear_solve_num_iters_);
+  // A solve counts as failed when its status is not Ok and its achieved relative residual is
+  // above the request (Belos may flag "unconverged" after reaching it; see ArcLength.cpp).
+  const bool bad = st != NOX::Abstract::Group::Ok || last_linear_solve_status_ != NOX::Abstract::Group::Ok;
+  if (bad && !(last_linear_solve_achieved_tol_ >= 0 && last_linear_solve_achieved_tol_ <= tolerance_)) {
+    ++stats_->failures;
+    stats_->lastTol = last_linear_solve_achieved_tol_;
+    stats_->lastIters = last_linear_solve_num_iters_;
+  }
+  return st;
+}
 
-/// |R| / scale <= tol, with scale = |f_ext| or, when f_ext = 0, the reaction norm at the
-/// current iterate. Records the normalised residual of every iteration.
-class NormalizedResidualTest final : public NOX::StatusTest::Generic {
- public:
-  NormalizedResidualTest(const PeridynamicEvaluator& ev, double tol, double floorFactor, int stagnationStop)
-      : floor_(floorFactor * ev.roundoffScale()), ev_(ev), tol_(tol), stagnationStop_(stagnationStop) {}
+/// Steepest-descent direction for the trust-region solvers: g = J^T F. NOX's Thyra group
+/// does not implement it; the assembled Jacobian supports the transpose product.
+NOX::Abstract::Group::ReturnType CountingGroup::computeGradient() {
+  if (is_valid_gradient_dir_) return NOX::Abstract::Group::Ok;
+  if (!is_valid_f_ || !is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS))
+    return NOX::Abstract::Group::BadDependency;
+  ::Thyra::apply(*lop_, ::Thyra::TRANS, f_vec_->getThyraVector(), gradient_vec_->getThyraRCPVector().ptr());
+  is_valid_gradient_dir_ = true;
+  return NOX::Abstract::Group::Ok;
+}
 
-  NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver,
-                                          NOX::StatusTest::CheckType) override {
-    const auto& grp = solver.getSolutionGroup();
-    if (!grp.isF()) {  // some NOX solvers check before evaluating F
-      status_ = NOX::StatusTest::Unevaluated;
-      return status_;
-    }
-    const double normF = grp.getNormF();
-    double scale = ev_.externalForceNorm();
-    reaction_ = false;
-    if (!(scale > 0)) {
-      const auto& x = dynamic_cast<const NOX::Thyra::Vector&>(grp.getX()).getThyraVector();
-      scale = ev_.reactionNorm(x);
-      reaction_ = true;
-    }
-    if (!(scale > 0)) scale = 1.0;  // nothing loaded: absolute residual
-    scale_ = scale;
-    const double r = normF / scale;
-    history_[solver.getNumIterations()] = r;
-    atFloor_ = std::isfinite(r) && r > tol_ && normF <= floor_;
-    status_ = (std::isfinite(r) && (r <= tol_ || atFloor_)) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
-    if (status_ == NOX::StatusTest::Unconverged && stagnationStop_ > 0) {
-      stagnation_ = stagnationDiagnosis(history(), stagnationStop_);
-      if (!stagnation_.empty()) status_ = NOX::StatusTest::Failed;
-    }
+/// J v with the Jacobian operator of this group's last computeJacobian. NOX's version refuses
+/// when another group copy holds the shared solver object, which the trust-region solvers
+/// provoke by copying groups between the Newton and Cauchy directions.
+NOX::Abstract::Group::ReturnType CountingGroup::applyJacobian(const NOX::Abstract::Vector& in,
+                                                              NOX::Abstract::Vector& out) const {
+  if (!is_valid_jacobian_) return NOX::Abstract::Group::BadDependency;
+  ::Thyra::apply(*lop_, ::Thyra::NOTRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
+                 dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
+  return NOX::Abstract::Group::Ok;
+}
+
+NOX::Abstract::Group::ReturnType CountingGroup::applyJacobianTranspose(const NOX::Abstract::Vector& in,
+                                                                       NOX::Abstract::Vector& out) const {
+  if (!is_valid_jacobian_ || !::Thyra::opSupported(*lop_, ::Thyra::TRANS)) return NOX::Abstract::Group::BadDependency;
+  ::Thyra::apply(*lop_, ::Thyra::TRANS, dynamic_cast<const NOX::Thyra::Vector&>(in).getThyraVector(),
+                 dynamic_cast<NOX::Thyra::Vector&>(out).getThyraRCPVector().ptr());
+  return NOX::Abstract::Group::Ok;
+}
+
+Teuchos::RCP<NOX::Abstract::Group> CountingGroup::clone(NOX::CopyType type) const {
+  return Teuchos::rcp(new CountingGroup(*this, type));
+}
+
+NormalizedResidualTest::NormalizedResidualTest(Teuchos::RCP<const ResidualScale> scale, double tol, double floorFactor,
+                                               int stagnationStop)
+    : residualScale_(std::move(scale)), floor_(floorFactor * residualScale_->roundoff()), tol_(tol),
+      stagnationStop_(stagnationStop) {}
+
+NOX::StatusTest::StatusType NormalizedResidualTest::checkStatus(const NOX::Solver::Generic& solver,
+                                                                NOX::StatusTest::CheckType) {
+  const auto& grp = solver.getSolutionGroup();
+  if (!grp.isF()) {  // some NOX solvers check before evaluating F
+    status_ = NOX::StatusTest::Unevaluated;
     return status_;
   }
-  NOX::StatusTest::StatusType getStatus() const override { return status_; }
-  std::ostream& print(std::ostream& os, int indent = 0) const override {
-    for (int i = 0; i < indent; ++i) os << ' ';
-    return os << "normalised residual <= " << tol_ << "\n";
+  const double normF = grp.getNormF();
+  const auto& x = dynamic_cast<const NOX::Thyra::Vector&>(grp.getX()).getThyraVector();
+  double scale = residualScale_->scale(x, reaction_);
+  if (!(scale > 0)) scale = 1.0;  // nothing loaded: absolute residual
+  scale_ = scale;
+  const double r = normF / scale;
+  history_[solver.getNumIterations()] = r;
+  atFloor_ = std::isfinite(r) && r > tol_ && normF <= floor_;
+  status_ = (std::isfinite(r) && (r <= tol_ || atFloor_)) ? NOX::StatusTest::Converged : NOX::StatusTest::Unconverged;
+  if (status_ == NOX::StatusTest::Unconverged && stagnationStop_ > 0) {
+    stagnation_ = stagnationDiagnosis(history(), stagnationStop_);
+    if (!stagnation_.empty()) status_ = NOX::StatusTest::Failed;
   }
-  std::vector<double> history() const {
-    std::vector<double> h;
-    for (const auto& kv : history_) h.push_back(kv.second);
-    return h;
-  }
-  bool reactionNormalised() const { return reaction_; }
-  double scale() const { return scale_; }
-  bool atFloor() const { return atFloor_; }
-  double floorNormalised() const { return floor_ / scale_; }
-  const std::string& stagnation() const { return stagnation_; }
+  return status_;
+}
 
- private:
-  double floor_ = 0.0;
-  bool atFloor_ = false;
-  const PeridynamicEvaluator& ev_;
-  double tol_;
-  int stagnationStop_ = 0;
-  std::string stagnation_;
-  NOX::StatusTest::StatusType status_ = NOX::StatusTest::Unevaluated;
-  std::map<int, double> history_;
-  bool reaction_ = false;
-  double scale_ = 1.0;
-};
+std::ostream& NormalizedResidualTest::print(std::ostream& os, int indent) const {
+  for (int i = 0; i < indent; ++i) os << ' ';
+  return os << "normalised residual <= " << tol_ << "\n";
+}
 
-}  // namespace
+std::vector<double> NormalizedResidualTest::history() const {
+  std::vector<double> h;
+  for (const auto& kv : history_) h.push_back(kv.second);
+  return h;
+}
+
+double EvaluatorResidualScale::scale(const Thyra::VectorBase<double>& x, bool& reaction) const {
+  const double fext = ev_->externalForceNorm();
+  reaction = !(fext > 0);
+  return reaction ? ev_->reactionNorm(x) : fext;
+}
+
+double EvaluatorResidualScale::roundoff() const { return ev_->roundoffScale(); }
 
 std::string linearSolverFailure(const std::exception& e) {
   // Trilinos exceptions carry the source location and the throw test before the reason;
@@ -189,8 +157,12 @@ std::string linearSolverFailure(const std::exception& e) {
   return "linear solver error: " + reason;
 }
 
+NewtonSolver::NewtonSolver(Teuchos::RCP<const Thyra::ModelEvaluator<double>> model,
+                           Teuchos::RCP<const ResidualScale> scale, const NewtonOptions& options)
+    : model_(std::move(model)), scale_(std::move(scale)), options_(options) {}
+
 NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options)
-    : evaluator_(std::move(evaluator)), options_(options) {}
+    : NewtonSolver(evaluator, Teuchos::rcp(new EvaluatorResidualScale(evaluator)), options) {}
 
 NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   NewtonResult result;
@@ -218,10 +190,10 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
 
   auto x0 = x.clone_v();
   NOX::Thyra::Vector guess(x0);
-  Teuchos::RCP<RecordingGroup> group;
+  Teuchos::RCP<CountingGroup> group;
 
-  auto residualTest = Teuchos::rcp(new NormalizedResidualTest(*evaluator_, options_.tolerance, options_.floorFactor,
-                                                              options_.stagnationStop));
+  auto residualTest =
+      Teuchos::rcp(new NormalizedResidualTest(scale_, options_.tolerance, options_.floorFactor, options_.stagnationStop));
   auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
   auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
   auto combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
@@ -231,15 +203,13 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
 
   NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
   try {
-    const JacobianMode mode = evaluator_->jacobianMode();
-    if (mode == JacobianMode::Assembled) {
-      group = Teuchos::rcp(new RecordingGroup(guess, evaluator_));
+    if (!model_->createOutArgs().supports(Thyra::ModelEvaluatorBase::OUT_ARG_W_prec)) {
+      group = Teuchos::rcp(new CountingGroup(guess, model_));
     } else {
-      // Matrix-free: W_op is the evaluator's analytic product or its finite difference of f;
-      // the preconditioner, when there is one, is built by the model (W_prec).
-      group = Teuchos::rcp(new RecordingGroup(guess, evaluator_, evaluator_->create_W_op(), evaluator_->get_W_factory(),
-                                                 evaluator_->create_W_prec(),
-                                                 Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
+      // A model that builds its own preconditioner (perinox's matrix-free W_op, the analytic
+      // product or a finite difference of f, preconditioned from an assembled matrix).
+      group = Teuchos::rcp(new CountingGroup(guess, model_, model_->create_W_op(), model_->get_W_factory(),
+                                             model_->create_W_prec(), Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
     }
     group->setTolerance(options_.linearTolerance);
     group->computeF();  // the inexact trust-region solver asks for |F| before computing it
@@ -267,8 +237,9 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   result.linear.failures = result.linearFailures;
   // When NOX threw, getNumIterations was never read: the residual history (one entry per
   // iterate) counts the iterations it ran.
-  totalNewton_ += result.iterations > 0 ? result.iterations
-                                        : std::max<long long>(0, static_cast<long long>(result.residuals.size()) - 1);
+  result.work = result.iterations > 0 ? result.iterations
+                                      : std::max<long long>(0, static_cast<long long>(result.residuals.size()) - 1);
+  totalNewton_ += result.work;
   totalLinear_.solves += result.linear.solves;
   totalLinear_.krylovIterations += result.linear.krylovIterations;
   totalLinear_.failures += result.linear.failures;

@@ -4,6 +4,7 @@
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_ModelEvaluator.hpp>
 #include <Thyra_VectorBase.hpp>
 #include <stdexcept>
 #include <string>
@@ -36,6 +37,8 @@ struct NewtonOptions {
 struct NewtonResult {
   bool converged = false;
   int iterations = 0;
+  long long work = 0;              // iterations done, counted also when the solver threw (the
+                                   // residual history's length); ADR: its explicit iterations
   std::vector<double> residuals;   // normalised residual at iterations 0..iterations
   bool reactionNormalised = false; // true when f_ext = 0 and the reaction norm was the scale
   double normaliser = 1.0;
@@ -54,11 +57,42 @@ std::string stagnationDiagnosis(const std::vector<double>& residuals, int window
 /// line of its message, with a hint when a factorisation found the tangent singular.
 std::string linearSolverFailure(const std::exception& e);
 
+/// What the seed's convergence test divides |R| by (|R| / scale <= tolerance), and the round-off
+/// level below which |R| cannot be resolved. Implement it for any model; perinox's evaluator has
+/// EvaluatorResidualScale.
+class ResidualScale {
+ public:
+  virtual ~ResidualScale() = default;
+  /// The scale at the state x (the model's current load factor); set `reaction` when it is a
+  /// reaction norm (reported per step). A scale <= 0 makes the test absolute.
+  virtual double scale(const Thyra::VectorBase<double>& x, bool& reaction) const = 0;
+  /// |R| at or below floorFactor times this also counts as converged (0: no floor).
+  virtual double roundoff() const { return 0.0; }
+};
+
+/// perinox's scale (seed 000): |lambda f_ext|, or, when no external force acts, the reaction
+/// norm at x; the round-off level is PeridynamicEvaluator::roundoffScale.
+class EvaluatorResidualScale final : public ResidualScale {
+ public:
+  explicit EvaluatorResidualScale(Teuchos::RCP<const PeridynamicEvaluator> evaluator) : ev_(std::move(evaluator)) {}
+  double scale(const Thyra::VectorBase<double>& x, bool& reaction) const override;
+  double roundoff() const override;
+
+ private:
+  Teuchos::RCP<const PeridynamicEvaluator> ev_;
+};
+
+/// Newton's method through NOX on any Thyra::ModelEvaluator, with perinox's convergence test and
+/// linear-solve accounting (NoxExtensions.hpp). The Jacobian comes from the model's W_op and
+/// W factory; a model that supports W_prec builds the preconditioner (matrix-free W_op).
 class NewtonSolver {
  public:
+  NewtonSolver(Teuchos::RCP<const Thyra::ModelEvaluator<double>> model, Teuchos::RCP<const ResidualScale> scale,
+               const NewtonOptions& options);
+  /// perinox's evaluator with its own scale.
   NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options);
-  /// Solves f(x) = 0 at the evaluator's current load factor, starting from and updating x.
-  /// On failure x keeps the last iterate; the caller restores a converged state.
+  /// Solves f(x) = 0 at the model's current load factor (its nominal p), starting from and
+  /// updating x. On failure x keeps the last iterate; the caller restores a converged state.
   NewtonResult solve(Thyra::VectorBase<double>& x);
   /// Totals over every call of solve, failed ones included (the cost of cut-backs and retries):
   /// Newton iterations and linear work.
@@ -66,7 +100,8 @@ class NewtonSolver {
   const LinearSolveCounts& totalLinear() const { return totalLinear_; }
 
  private:
-  Teuchos::RCP<PeridynamicEvaluator> evaluator_;
+  Teuchos::RCP<const Thyra::ModelEvaluator<double>> model_;
+  Teuchos::RCP<const ResidualScale> scale_;
   NewtonOptions options_;
   long long totalNewton_ = 0;
   LinearSolveCounts totalLinear_;

@@ -1,0 +1,81 @@
+#pragma once
+// perinox's extensions of NOX, for host applications that set up their own NOX solve (on
+// perinox's evaluator or any Thyra model) and want perinox's convergence test and accounting:
+//   CountingGroup          NOX::Thyra::Group that counts linear solves, Krylov iterations and the
+//                          solves its linear solver did not converge (NOX goes on with the inexact
+//                          direction), computes J^T F for the trust-region solvers, and applies
+//                          J and J^T with its own last Jacobian;
+//   NormalizedResidualTest the seed's test |R| / scale <= tol with a round-off floor and an
+//                          optional stagnation stop, recording the normalised residual history.
+// NewtonSolver (NewtonSolver.hpp) is built from these two.
+#include <NOX_StatusTest_Generic.H>
+#include <NOX_Thyra_Group.H>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "perinox/solver/NewtonSolver.hpp"
+
+namespace perinox {
+
+class CountingGroup final : public NOX::Thyra::Group {
+ public:
+  using NOX::Thyra::Group::Group;
+  /// Copies (the trust-region solvers compute directions on them) share the counts.
+  CountingGroup(const CountingGroup& source, NOX::CopyType type);
+  NOX::Abstract::Group::ReturnType computeNewton(Teuchos::ParameterList& p) override;
+  NOX::Abstract::Group::ReturnType computeGradient() override;
+  NOX::Abstract::Group::ReturnType applyJacobian(const NOX::Abstract::Vector& in, NOX::Abstract::Vector& out) const override;
+  NOX::Abstract::Group::ReturnType applyJacobianTranspose(const NOX::Abstract::Vector& in,
+                                                          NOX::Abstract::Vector& out) const override;
+  Teuchos::RCP<NOX::Abstract::Group> clone(NOX::CopyType type) const override;
+  /// The relative residual a linear solve must reach to count as converged.
+  void setTolerance(double t) { tolerance_ = t; }
+  int failures() const { return stats_->failures; }
+  double lastAchieved() const { return stats_->lastTol; }
+  int lastIterations() const { return stats_->lastIters; }
+  const LinearSolveCounts& counts() const { return stats_->counts; }
+
+ private:
+  struct Stats {
+    int failures = 0;
+    double lastTol = 0;
+    int lastIters = 0;
+    LinearSolveCounts counts;
+  };
+  double tolerance_ = 0;
+  std::shared_ptr<Stats> stats_ = std::make_shared<Stats>();
+};
+
+/// Converged when |R| / scale <= tol or |R| <= floorFactor * roundoff (the residual's round-off
+/// level), with the scale from a ResidualScale at the current iterate. With stagnationStop > 0 it
+/// fails once the residual has not halved over that many iterations.
+class NormalizedResidualTest final : public NOX::StatusTest::Generic {
+ public:
+  NormalizedResidualTest(Teuchos::RCP<const ResidualScale> scale, double tol, double floorFactor, int stagnationStop);
+  NOX::StatusTest::StatusType checkStatus(const NOX::Solver::Generic& solver, NOX::StatusTest::CheckType) override;
+  NOX::StatusTest::StatusType getStatus() const override { return status_; }
+  std::ostream& print(std::ostream& os, int indent = 0) const override;
+  /// The normalised residual of every iterate checked, in order.
+  std::vector<double> history() const;
+  bool reactionNormalised() const { return reaction_; }
+  double scale() const { return scale_; }
+  bool atFloor() const { return atFloor_; }
+  double floorNormalised() const { return floor_ / scale_; }
+  const std::string& stagnation() const { return stagnation_; }
+
+ private:
+  Teuchos::RCP<const ResidualScale> residualScale_;
+  double floor_ = 0.0;
+  bool atFloor_ = false;
+  double tol_;
+  int stagnationStop_ = 0;
+  std::string stagnation_;
+  NOX::StatusTest::StatusType status_ = NOX::StatusTest::Unevaluated;
+  std::map<int, double> history_;
+  bool reaction_ = false;
+  double scale_ = 1.0;
+};
+
+}  // namespace perinox
