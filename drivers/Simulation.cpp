@@ -197,6 +197,12 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", csv.str());
 }
 
+/// The residual history up to its first NaN or infinity (JSON has no such numbers; a step whose
+/// residual became non-finite says so with "residual_not_finite").
+std::vector<double> finitePrefix(const std::vector<double>& r) {
+  return {r.begin(), std::find_if(r.begin(), r.end(), [](double v) { return !std::isfinite(v); })};
+}
+
 /// One step's record as summary.json writes it (and a checkpoint keeps it).
 nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
   nlohmann::json j = {{"step", s.step},
@@ -206,7 +212,7 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
                       {"linear_solves", s.linearSolves},
                       {"krylov_iterations", s.krylovIterations},
                       {"linear_failures", s.linearFailures},
-                      {"residuals", s.residuals},
+                      {"residuals", finitePrefix(s.residuals)},
                       {"normalised_by", s.reactionNormalised ? "reaction" : "external force"},
                       {"cutbacks", s.cutbacks},
                       {"converged_at_roundoff_floor", s.atRoundoffFloor},
@@ -215,6 +221,7 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
                       {"break_rounds", s.breakRounds},
                       {"detached", s.detached},
                       {"time_s", s.elapsed}};
+  if (finitePrefix(s.residuals).size() < s.residuals.size()) j["residual_not_finite"] = true;
   if (arcLength) j["arc_length"] = s.arcLength;
   if (s.negativePivots >= -1) j["negative_pivots"] = s.negativePivots;
   if (damage) {
@@ -382,9 +389,9 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
           what = "'" + k + "' = " + v.second + " in the checkpoint, not in this scene";
           break;
         }
-    throw std::invalid_argument(where + " was written for another scene (the same scene and --set options are "
-                                "needed, except run controls: Solver/Max Total Steps, Linear Solver Preset, "
-                                "Linear Solver, Verbosity, Damage/Max Stall Breaks, Output): " + what);
+    throw std::invalid_argument(where + " is for another scene: " + what +
+                                " (only run controls may differ: Max Total Steps, the linear solver, Verbosity, Max "
+                                "Stall Breaks, Output)");
   }
   // Everything the loop will read, checked now, before any output exists.
   try {

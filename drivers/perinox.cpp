@@ -142,7 +142,9 @@ int main(int argc, char** argv) {
     opt.outputDir = "out/" + stem;
   }
   const std::string xmlDir = envOr("PERINOX_XML_DIR", PERINOX_SOURCE_DIR "/xml");
-  opt.plotScript = envOr("PERINOX_PLOT_SCRIPT", PERINOX_SOURCE_DIR "/drivers/plot_result.py");
+  // PERINOX_PLOT_SCRIPT set and empty: no plots (the tests' setting).
+  const char* plotScript = std::getenv("PERINOX_PLOT_SCRIPT");
+  opt.plotScript = plotScript ? plotScript : PERINOX_SOURCE_DIR "/drivers/plot_result.py";
 
   perinox::Scene scene;
   try {

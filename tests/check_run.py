@@ -8,6 +8,7 @@ Checks:
   --message TEXT       TEXT must appear in the output, and on failure stderr must hold exactly
                        one non-empty line (one clear sentence, not a stack trace)
   --no-output          neither DIR nor DIR.partial may exist afterwards
+  --png NAME...        these files exist in DIR and are PNG images (the plot script ran)
   --converged          summary.json says converged, every step recorded
   --max-error X        summary.json's e_u is at most X
   --probe NAME[@LF] C V RTOL  probe NAME, component C, at the last step (or the step with load
@@ -76,6 +77,7 @@ def main():
     ap.add_argument("--work-counts", choices=["direct", "krylov"],
                     help="check the recorded solver work: totals equal the sums over steps, a linear solve "
                          "for every Newton iteration, and Krylov iterations (>= 1 a solve) or none (direct)")
+    ap.add_argument("--png", nargs="+", default=[])
     ap.add_argument("--linear-failures", choices=["none", "some"],
                     help="with --work-counts: no linear solve, or at least one, recorded as unconverged")
     ap.add_argument("--floor", type=float, default=FLOOR,
@@ -169,6 +171,14 @@ def main():
         print(f"work: {failures} unconverged linear solves")
         print(f"work: {newton} Newton iterations in converged solves, {s['newton_iterations_total']} in all, "
               f"{s['linear_solves_total']} linear solves, {s['krylov_iterations_total']} Krylov iterations")
+    for name in a.png:
+        path = os.path.join(a.out, name)
+        if not os.path.isfile(path):
+            fail(f"{path} was not drawn")
+        with open(path, "rb") as f:
+            if f.read(8) != b"\x89PNG\r\n\x1a\n":
+                fail(f"{path} is not a PNG image")
+        print(f"plot: {path}")
     if a.no_output:
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):
