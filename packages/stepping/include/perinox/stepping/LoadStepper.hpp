@@ -1,0 +1,202 @@
+#pragma once
+// Load stepping for any Thyra::ModelEvaluator whose parameter p(0) is the load factor lambda:
+// lambda goes from 0 (or a resumed state) to 1 in increments, each solved by a step solver
+// (Newton), with a predictor, cut-backs, growth after easy steps, an optional damage policy
+// (bonds broken after a converged step, a stall break and a reload when a step cannot be
+// converged) and step observers (probes, console lines, checkpoints, result writers). Nothing here
+// knows peridynamics: perinox's evaluator is one model it drives (drivers/Simulation.cpp), a test
+// double is another (packages/stepping/tests).
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_RCP.hpp>
+#include <Thyra_ModelEvaluatorDelegatorBase.hpp>
+#include <Thyra_VectorBase.hpp>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "perinox/solver/NewtonSolver.hpp"
+
+namespace perinox {
+
+/// One load step as it is reported (summary.json) and checkpointed.
+struct StepRecord {
+  int step = 0;
+  double loadFactor = 0;
+  int newtonIterations = 0;        // iterations of the solve that converged the step (and its
+                                   // re-equilibrations)
+  long long newtonIterationsAll = 0;  // every attempt of the step, cut-backs included
+  long long linearSolves = 0;      // linear systems solved in the step, all attempts
+  long long krylovIterations = 0;  // Krylov iterations spent on them (0 with a direct solver)
+  long long linearFailures = 0;    // of those, solves the linear solver reported unconverged
+                                   // (Newton went on with the inexact direction)
+  std::vector<double> residuals;
+  bool reactionNormalised = false;
+  bool atRoundoffFloor = false;    // converged on the round-off floor rather than the tolerance
+  double floor = 0;                // that floor, normalised
+  int cutbacks = 0;
+  double elapsed = 0;
+  long long brokenBonds = 0;       // damage: bonds broken after this step converged
+  int breakRounds = 0;             // damage: re-equilibrations after breaking
+  std::vector<long long> detached; // particles detached in this step
+  long long fragmentParticles = 0; // of those, particles of free-floating fragments
+  long long stallBrokenBonds = 0;  // damage, stall break: bonds broken because the step could not
+                                   // be converged (included in brokenBonds)
+  double stallStretch = 0;         // the largest stretch at that break
+  int reloadSteps = 0;             // damage: sub-steps of reloading the damaged body when Newton could
+                                   // not re-equilibrate directly after a break
+  double arcLength = 0;            // arc-length continuation: the arc of this step
+  int negativePivots = -2;         // arc-length continuation with Stability Check: the tangent's
+                                   // negative pivots at the converged point (-2: not computed)
+};
+
+/// A model whose parameter p(0) is the load factor, evaluated at the load factor set here: every
+/// evaluation is given p(0) = lambda unless its caller gave one (NOX's group gives none).
+class LoadFactorModel : public Thyra::ModelEvaluatorDelegatorBase<double> {
+ public:
+  /// Refuses (std::invalid_argument, one sentence) a model without a one-value parameter p(0).
+  explicit LoadFactorModel(const Teuchos::RCP<Thyra::ModelEvaluator<double>>& model);
+  void setLoadFactor(double lambda);
+  double loadFactor() const { return lambda_; }
+  /// Called with every new load factor (a model that keeps its own, e.g. for diagnostics).
+  void onLoadFactor(std::function<void(double)> listener) { listener_ = std::move(listener); }
+  /// df/dlambda at x and the current load factor: the model's DfDp(0) if it supports it by
+  /// column, else the central difference (f(lambda + h) - f(lambda - h)) / 2h, h = 1e-6 max(1, |lambda|).
+  void loadDerivative(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& dfdl) const;
+
+ private:
+  void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
+                     const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;
+  double lambda_ = 0.0;
+  std::function<void(double)> listener_;
+};
+
+/// The stepping controls (validated; validParameters() documents them).
+struct LoadStepperOptions {
+  int loadSteps = 10;             // equal nominal increments 1 / loadSteps
+  int maxCutbacks = 4;            // halvings of a failing step before the run stops
+  double minIncrement = 1e-6;     // smallest increment, as a fraction of the nominal one
+  int maxTotalSteps = 0;          // steps in all (0: 20 x loadSteps)
+  bool adaptive = false;          // grow by 1.5 after easy steps up to maxIncrement
+  int easyIterations = 4;
+  double maxIncrement = 0.25;
+  bool predictor = true;          // extrapolate the last increment (and, for the first step with
+                                  // prescribed motion, the tangent dx/dlambda: tangentPredictor)
+  bool tangentPredictor = false;  // first step: x = x0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda
+  double linearTolerance = 1e-12; // relative residual of the tangent predictor's linear solve
+  std::string keyPrefix;          // how messages name the keys ("Solver/" in a scene)
+
+  /// The parameter list the options are read from: "Load Steps", "Max Cutbacks", "Min Increment",
+  /// "Max Total Steps", "Adaptive Steps", "Easy Iterations", "Max Increment", "Predictor",
+  /// "Tangent Predictor".
+  static Teuchos::RCP<const Teuchos::ParameterList> validParameters();
+  /// Reads and checks a list (unknown keys, wrong types, values out of range): throws
+  /// std::invalid_argument with one sentence starting with `where`.
+  static LoadStepperOptions fromParameterList(const Teuchos::ParameterList& list, const std::string& where);
+};
+
+/// What breaks, and how the stepper re-equilibrates after it. perinox's damage effect is one.
+class DamagePolicy {
+ public:
+  struct Breaks {
+    long long brokenBonds = 0;
+    std::vector<long long> detached;
+    long long fragmentParticles = 0;
+    double maxStretch = 0;        // a stall break: the largest stretch broken at
+    std::string note;             // a line for the console (empty: none)
+  };
+  virtual ~DamagePolicy() = default;
+  /// After a converged step, at x and the model's load factor: break what the criterion says.
+  virtual Breaks breakAfterStep(const Thyra::VectorBase<double>& x) = 0;
+  /// A step that could not be converged, at the last converged state x: break to go on (nothing
+  /// broken: the run stops). `why` is the failed step's reason.
+  virtual Breaks breakOnStall(const Thyra::VectorBase<double>& x, const std::string& why) = 0;
+  /// The reason a stall could not be broken (appended to the failure).
+  virtual std::string nothingToBreak() const { return "nothing to break at the stall"; }
+  /// Appended to the failure when maxStallBreaks stall breaks have been made.
+  virtual std::string stallLimitReached() const {
+    return "the limit of " + std::to_string(maxStallBreaks) + " stall breaks was reached";
+  }
+  /// The console line of a step in which something broke.
+  virtual std::string describeStep(const StepRecord& record) const;
+
+  int maxBreakRounds = 50;        // re-equilibrations per step
+  bool breakOnStalls = false;     // call breakOnStall when a step fails for good
+  int maxStallBreaks = 200;
+  double reloadTolerance = 0.01;  // a snap-back's limit load is found to this fraction
+};
+
+/// A step as observers see it.
+struct StepInfo {
+  const StepRecord& record;
+  const NewtonResult& result;     // the solve that converged it
+  const Thyra::VectorBase<double>& x;
+  double loadFactor;
+};
+
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  /// A line about the run's progress (cut-backs, stall breaks, snap-backs, damage).
+  virtual void note(const std::string&) {}
+  /// Before a converged step is accepted: a non-empty sentence stops the run with that failure,
+  /// and the run's result is the previous step's state (e.g. a stability check).
+  virtual std::string vet(const StepInfo&, double /*previousLoadFactor*/) { return ""; }
+  /// A step was accepted.
+  virtual void accepted(const StepInfo&) {}
+};
+
+/// The stepper's own state, for checkpoints and restarts.
+struct StepperState {
+  int step = 0;
+  double loadFactor = 0.0;
+  double increment = 0.0;        // the next increment
+  double lastIncrement = 0.0;    // of the last accepted step (the predictor's)
+  int stallBreaks = 0;
+};
+
+class LoadStepper {
+ public:
+  /// solve: one step's nonlinear solve at the model's load factor (NewtonSolver::solve, ADR, ...);
+  /// reequilibrate: the solve after a damage break (default: solve).
+  LoadStepper(Teuchos::RCP<LoadFactorModel> model, std::function<NewtonResult(Thyra::VectorBase<double>&)> solve,
+              const LoadStepperOptions& options);
+  void setReequilibrationSolve(std::function<NewtonResult(Thyra::VectorBase<double>&)> solve) { reequilibrate_ = std::move(solve); }
+  void setDamagePolicy(DamagePolicy* policy) { damage_ = policy; }
+  void addObserver(StepObserver* observer) { observers_.push_back(observer); }
+  /// Start from a checkpoint's state instead of lambda = 0 (the records and path of the steps so
+  /// far, the converged state and the one before it).
+  void resume(const StepperState& state, std::vector<StepRecord> records, std::vector<double> path,
+              const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious);
+  /// Steps to load factor 1 (or until a step fails for good). Returns true when it got there.
+  bool run();
+
+  const StepperState& state() const { return state_; }
+  const std::vector<StepRecord>& records() const { return records_; }
+  const std::vector<double>& path() const { return path_; }   // load factor of every accepted step
+  const Thyra::VectorBase<double>& converged() const { return *xConverged_; }
+  const Thyra::VectorBase<double>& previous() const { return *xPrevious_; }
+  const std::string& failure() const { return failure_; }
+
+ private:
+  NewtonResult reequilibrate(Thyra::VectorBase<double>& x, double& lambda, StepRecord& rec);
+  /// z = dx/dlambda at the converged state x from J z = -df/dlambda; "" or why it failed.
+  std::string tangent(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& z);
+  void note(const std::string& line);
+  void setLoadFactor(double lambda);
+
+  Teuchos::RCP<LoadFactorModel> model_;
+  std::function<NewtonResult(Thyra::VectorBase<double>&)> solve_, reequilibrate_;
+  LoadStepperOptions options_;
+  DamagePolicy* damage_ = nullptr;
+  std::vector<StepObserver*> observers_;
+  StepperState state_;
+  std::vector<StepRecord> records_;
+  std::vector<double> path_;
+  Teuchos::RCP<Thyra::VectorBase<double>> xConverged_, xPrevious_;
+  std::string failure_;
+  // Work of the step under way (every solve call in it).
+  long long stepWork_ = 0;
+  LinearSolveCounts stepLinear_;
+};
+
+}  // namespace perinox

@@ -1,0 +1,499 @@
+// Load stepping (see LoadStepper.hpp). Thyra only: no peridynamics, no NOX headers.
+#include "perinox/stepping/LoadStepper.hpp"
+
+#include <Teuchos_StandardParameterEntryValidators.hpp>
+#include <Thyra_DetachedVectorView.hpp>
+#include <Thyra_LinearOpWithSolveFactoryHelpers.hpp>
+#include <Thyra_MultiVectorBase.hpp>
+#include <Thyra_VectorStdOps.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace perinox {
+
+using MEB = Thyra::ModelEvaluatorBase;
+
+namespace {
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string shown(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// LoadFactorModel
+// ---------------------------------------------------------------------------------------------
+
+LoadFactorModel::LoadFactorModel(const Teuchos::RCP<Thyra::ModelEvaluator<double>>& model) {
+  if (model.is_null()) throw std::invalid_argument("LoadFactorModel: no model given");
+  if (model->Np() < 1 || model->get_p_space(0)->dim() != 1)
+    throw std::invalid_argument("LoadFactorModel: the model needs a parameter p(0) of one value, the load factor (it has " +
+                                std::to_string(model->Np()) + " parameter vectors)");
+  initialize(model);
+}
+
+void LoadFactorModel::setLoadFactor(double lambda) {
+  lambda_ = lambda;
+  if (listener_) listener_(lambda);
+}
+
+void LoadFactorModel::evalModelImpl(const MEB::InArgs<double>& in, const MEB::OutArgs<double>& out) const {
+  MEB::InArgs<double> args = getUnderlyingModel()->createInArgs();
+  args.setArgs(in, true);
+  if (args.get_p(0).is_null()) {
+    auto p = Thyra::createMember(getUnderlyingModel()->get_p_space(0));
+    Thyra::set_ele(0, lambda_, p.ptr());
+    args.set_p(0, p);
+  }
+  getUnderlyingModel()->evalModel(args, out);
+}
+
+void LoadFactorModel::loadDerivative(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& dfdl) const {
+  const auto& m = *getUnderlyingModel();
+  auto in = m.createInArgs();
+  in.set_x(Teuchos::rcpFromRef(x));
+  auto p = Thyra::createMember(m.get_p_space(0));
+  auto out = m.createOutArgs();
+  if (out.supports(MEB::OUT_ARG_DfDp, 0).supports(MEB::DERIV_MV_BY_COL)) {
+    Thyra::set_ele(0, lambda_, p.ptr());
+    in.set_p(0, p);
+    auto mv = Thyra::createMembers(m.get_f_space(), 1);
+    out.set_DfDp(0, MEB::Derivative<double>(mv, MEB::DERIV_MV_BY_COL));
+    m.evalModel(in, out);
+    Thyra::copy(*mv->col(0), Teuchos::ptrFromRef(dfdl));
+  } else {
+    const double h = 1e-6 * std::max(1.0, std::abs(lambda_));
+    auto fm = dfdl.clone_v();
+    for (const double sign : {1.0, -1.0}) {
+      Thyra::set_ele(0, lambda_ + sign * h, p.ptr());
+      in.set_p(0, p);
+      auto o = m.createOutArgs();
+      o.set_f(sign > 0 ? Teuchos::rcpFromRef(dfdl) : fm);
+      m.evalModel(in, o);
+    }
+    Thyra::Vp_StV(Teuchos::ptrFromRef(dfdl), -1.0, *fm);
+    Thyra::scale(0.5 / h, Teuchos::ptrFromRef(dfdl));
+  }
+  if (listener_) listener_(lambda_);  // the model evaluated at other load factors
+}
+
+// ---------------------------------------------------------------------------------------------
+// Options
+// ---------------------------------------------------------------------------------------------
+
+Teuchos::RCP<const Teuchos::ParameterList> LoadStepperOptions::validParameters() {
+  static const auto valid = [] {
+    auto l = Teuchos::rcp(new Teuchos::ParameterList("Load Stepping"));
+    const LoadStepperOptions d;
+    l->set("Load Steps", d.loadSteps, "equal load increments to load factor 1 (1 to 1000000)");
+    l->set("Max Cutbacks", d.maxCutbacks, "halvings of a failing load step before the run stops (0 to 60)");
+    l->set("Min Increment", d.minIncrement, "smallest load increment, as a fraction of the nominal one (0, 1]");
+    l->set("Max Total Steps", d.maxTotalSteps, "steps allowed in all, counting reduced ones (0: 20 x Load Steps)");
+    l->set("Adaptive Steps", d.adaptive, "grow the increment by 1.5 after steps of at most 'Easy Iterations' iterations");
+    l->set("Easy Iterations", d.easyIterations, "adaptive stepping: an easy step needs at most this many iterations");
+    l->set("Max Increment", d.maxIncrement, "adaptive stepping: the largest load increment (0, 1]");
+    l->set("Predictor", d.predictor, "start each step from the last increment extrapolated");
+    l->set("Tangent Predictor", d.tangentPredictor,
+           "first step: move with the load along dx/dlambda (J dx/dlambda = -df/dlambda) before Newton");
+    return l;
+  }();
+  return valid;
+}
+
+LoadStepperOptions LoadStepperOptions::fromParameterList(const Teuchos::ParameterList& list, const std::string& where) {
+  const auto valid = validParameters();
+  for (auto it = list.begin(); it != list.end(); ++it) {
+    const std::string& name = list.name(it);
+    if (!valid->isParameter(name))
+      throw std::invalid_argument(where + ": unknown load-stepping key '" + name + "' (known: Load Steps, Max Cutbacks, Min "
+                                  "Increment, Max Total Steps, Adaptive Steps, Easy Iterations, Max Increment, Predictor, "
+                                  "Tangent Predictor)");
+    if (list.entry(it).getAny(false).type() != valid->getEntry(name).getAny(false).type())
+      throw std::invalid_argument(where + ": '" + name + "' must be of type " + valid->getEntry(name).getAny(false).typeName());
+  }
+  LoadStepperOptions o;
+  Teuchos::ParameterList l(list);  // get with a default is not const
+  o.loadSteps = l.get("Load Steps", o.loadSteps);
+  o.maxCutbacks = l.get("Max Cutbacks", o.maxCutbacks);
+  o.minIncrement = l.get("Min Increment", o.minIncrement);
+  o.maxTotalSteps = l.get("Max Total Steps", o.maxTotalSteps);
+  o.adaptive = l.get("Adaptive Steps", o.adaptive);
+  o.easyIterations = l.get("Easy Iterations", o.easyIterations);
+  o.maxIncrement = l.get("Max Increment", o.maxIncrement);
+  o.predictor = l.get("Predictor", o.predictor);
+  o.tangentPredictor = l.get("Tangent Predictor", o.tangentPredictor);
+  auto bad = [&](const char* key, const std::string& what) {
+    throw std::invalid_argument(where + ": '" + key + "' " + what);
+  };
+  if (o.loadSteps < 1 || o.loadSteps > 1000000) bad("Load Steps", "must be between 1 and 1000000, not " + std::to_string(o.loadSteps));
+  if (o.maxCutbacks < 0 || o.maxCutbacks > 60) bad("Max Cutbacks", "must be between 0 and 60");
+  if (!(o.minIncrement > 0 && o.minIncrement <= 1)) bad("Min Increment", "must lie in (0, 1], not " + shown(o.minIncrement));
+  if (o.maxTotalSteps < 0) bad("Max Total Steps", "must be 0 (20 x Load Steps) or positive");
+  if (o.easyIterations < 0) bad("Easy Iterations", "must be >= 0");
+  if (!(o.maxIncrement > 0 && o.maxIncrement <= 1)) bad("Max Increment", "must lie in (0, 1], not " + shown(o.maxIncrement));
+  if (o.maxTotalSteps == 0) o.maxTotalSteps = static_cast<int>(std::min<long long>(20LL * o.loadSteps, 2000000000LL));
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// LoadStepper
+// ---------------------------------------------------------------------------------------------
+
+std::string DamagePolicy::describeStep(const StepRecord& rec) const {
+  std::string s = "    damage: " + std::to_string(rec.brokenBonds) + " bond(s) broken, " + std::to_string(rec.breakRounds) +
+                  " re-equilibration(s), " + std::to_string(rec.detached.size()) + " particle(s) detached";
+  if (rec.fragmentParticles > 0)
+    s += " (" + std::to_string(rec.fragmentParticles) + " in free-floating fragments: frozen where they broke off)";
+  return s;
+}
+
+LoadStepper::LoadStepper(Teuchos::RCP<LoadFactorModel> model, std::function<NewtonResult(Thyra::VectorBase<double>&)> solve,
+                         const LoadStepperOptions& options)
+    : model_(std::move(model)), solve_(std::move(solve)), reequilibrate_(solve_), options_(options) {
+  if (options_.maxTotalSteps == 0) options_.maxTotalSteps = 20 * options_.loadSteps;
+  xConverged_ = Thyra::createMember(model_->get_x_space());
+  Thyra::assign(xConverged_.ptr(), 0.0);
+  xPrevious_ = xConverged_->clone_v();
+  state_.increment = 1.0 / options_.loadSteps;
+}
+
+void LoadStepper::resume(const StepperState& state, std::vector<StepRecord> records, std::vector<double> path,
+                         const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious) {
+  state_ = state;
+  records_ = std::move(records);
+  path_ = std::move(path);
+  Thyra::copy(x, xConverged_.ptr());
+  Thyra::copy(xPrevious, xPrevious_.ptr());
+  setLoadFactor(state_.loadFactor);
+}
+
+void LoadStepper::note(const std::string& line) {
+  for (auto* o : observers_) o->note(line);
+}
+
+void LoadStepper::setLoadFactor(double lambda) { model_->setLoadFactor(lambda); }
+
+// Re-equilibration after a damage break, at load factor lam. The solve from the state before the
+// break first. When the break releases so much that it cannot reach the new equilibrium from
+// there (an inverted F on the way, stagnation), the damaged body is reloaded in growing sub-steps
+// (the softening law depends only on the current stretch, so the equilibrium with a given set of
+// intact bonds does not depend on the path): from the state scaled to 0.9 of the load (a
+// snap-back usually lowers it by a few per cent), else 0.7, else half of it, else from zero. If the
+// damaged body cannot carry lam (the reload stalls at a limit point: the snap-back of a running
+// crack under displacement control), the state at the highest load reached is returned, that load
+// found to the policy's reload tolerance, and lam lowered to it; the stepping resumes from there
+// (an event-by-event trace of the snap-back).
+NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& lam, StepRecord& rec) {
+  auto run = [&](Thyra::VectorBase<double>& x) {
+    NewtonResult r = reequilibrate_(x);
+    stepWork_ += r.work;
+    stepLinear_.solves += r.linear.solves;
+    stepLinear_.krylovIterations += r.linear.krylovIterations;
+    stepLinear_.failures += r.linear.failures;
+    return r;
+  };
+  auto x0 = xs.clone_v();
+  NewtonResult first = run(xs);
+  if (first.converged || !damage_) return first;
+  int iters = first.iterations;
+  double bestMu = 0;
+  auto xBest = xs.clone_v();
+  NewtonResult bestR;
+  for (double start : {0.9, 0.7, 0.5, 0.0}) {
+    Thyra::V_StV(Teuchos::ptrFromRef(xs), start, *x0);
+    double mu = start, inc = 0.25 * (1.0 - start);
+    NewtonResult r;
+    r.converged = true;  // zero load with zero displacement is an equilibrium
+    if (start > 0) {
+      setLoadFactor(start * lam);
+      r = run(xs);
+      iters += r.iterations;
+      ++rec.reloadSteps;
+      if (!r.converged) continue;
+    }
+    auto xc = xs.clone_v();
+    NewtonResult rc = r;
+    while (mu < 1.0 - 1e-12) {
+      const double t = std::min(1.0, mu + inc);
+      setLoadFactor(t * lam);
+      Thyra::copy(*xc, Teuchos::ptrFromRef(xs));
+      r = run(xs);
+      iters += r.iterations;
+      ++rec.reloadSteps;
+      if (r.converged) {
+        mu = t;
+        Thyra::copy(xs, xc.ptr());
+        rc = r;
+        inc *= 1.5;
+      } else if (t - mu <= damage_->reloadTolerance) {
+        break;  // the limit load lies in [mu, t)
+      } else {
+        inc = 0.5 * (t - mu);  // halve the sub-step that failed (not the grown one t clamped)
+      }
+    }
+    if (mu > bestMu) {
+      bestMu = mu;
+      Thyra::copy(*xc, xBest.ptr());
+      bestR = rc;
+    }
+    break;  // the sub-stepping ran: its limit is the damaged body's
+  }
+  if (!(bestMu > 0)) {
+    setLoadFactor(lam);
+    Thyra::copy(*x0, Teuchos::ptrFromRef(xs));
+    first.iterations = iters;
+    first.failure += " (reloading the damaged body from 0.9 and half of the load and from zero failed too)";
+    return first;
+  }
+  Thyra::copy(*xBest, Teuchos::ptrFromRef(xs));
+  if (bestMu < 1.0) {
+    std::ostringstream s;
+    s << "    the damaged body cannot carry load factor " << lam << " (snap-back): equilibrium at " << bestMu * lam;
+    note(s.str());
+    lam *= bestMu;
+  }
+  setLoadFactor(lam);
+  bestR.iterations = iters;
+  return bestR;
+}
+
+bool LoadStepper::run() {
+  const int N = options_.loadSteps;
+  double& lambda = state_.loadFactor;
+  double& increment = state_.increment;
+  double& lastIncrement = state_.lastIncrement;
+  int& step = state_.step;
+  auto x = xConverged_->clone_v();
+  Teuchos::RCP<Thyra::VectorBase<double>> firstTangent;
+  failure_.clear();
+  bool ok = true;
+  while (lambda < 1.0 - 1e-12) {
+    if (step >= options_.maxTotalSteps) {
+      ok = false;
+      std::ostringstream s;
+      s << "reached '" << options_.keyPrefix << "Max Total Steps' = " << options_.maxTotalSteps << " at load factor "
+        << lambda << " (the load increment had fallen to " << increment << "): the solver can no longer advance the load";
+      failure_ = s.str();
+      break;
+    }
+    ++step;
+    const double tStep = now();
+    stepWork_ = 0;
+    stepLinear_ = LinearSolveCounts();
+    StepRecord rec;
+    rec.step = step;
+    NewtonResult nr;
+    auto solveOnce = [&](Thyra::VectorBase<double>& xs) {
+      NewtonResult r = solve_(xs);
+      stepWork_ += r.work;
+      stepLinear_.solves += r.linear.solves;
+      stepLinear_.krylovIterations += r.linear.krylovIterations;
+      stepLinear_.failures += r.linear.failures;
+      return r;
+    };
+    auto account = [&](StepRecord& r) {
+      r.newtonIterationsAll = stepWork_;
+      r.linearSolves = stepLinear_.solves;
+      r.krylovIterations = stepLinear_.krylovIterations;
+      r.linearFailures = stepLinear_.failures;
+    };
+    int cut = 0;
+    const double stepIncrement = increment;
+    // The first step has no increment to extrapolate. With prescribed motion, starting Newton from
+    // the unloaded body puts the whole prescribed jump into the bonds next to the loaded
+    // particles; the tangent predictor moves the body with the load first: one linear solve.
+    if (options_.predictor && options_.tangentPredictor && lastIncrement == 0 && step == 1) {
+      firstTangent = xConverged_->clone_v();
+      const std::string why = tangent(*xConverged_, *firstTangent);
+      if (!why.empty()) {
+        firstTangent = Teuchos::null;
+        note("  step 1: no tangent predictor (" + why + "); Newton starts from the unloaded body");
+      }
+    }
+    for (;;) {
+      const double target = std::min(1.0, lambda + increment);
+      setLoadFactor(target);
+      Thyra::copy(*xConverged_, x.ptr());
+      if (options_.predictor && lastIncrement > 0) {
+        // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
+        const double a = (target - lambda) / lastIncrement;
+        Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged_, -a, *xPrevious_);
+      } else if (firstTangent && step == 1) {
+        Thyra::Vp_StV(x.ptr(), target - lambda, *firstTangent);
+      }
+      nr = solveOnce(*x);
+      rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
+      if (nr.converged) {
+        lambda = target;
+        break;
+      }
+      Thyra::copy(*xConverged_, x.ptr());
+      if (cut >= options_.maxCutbacks) break;
+      if (0.5 * increment < options_.minIncrement / N) {
+        nr.failure += "; the load increment would fall below '" + options_.keyPrefix + "Min Increment'";
+        break;
+      }
+      ++cut;
+      increment *= 0.5;
+      rec.residuals.clear();
+      std::ostringstream s;
+      s << "  step " << step << ": " << nr.failure << "; cutting the load increment to " << increment;
+      note(s.str());
+    }
+    // A step that cannot be converged even at the smallest increment (softening bonds snap back
+    // under displacement control: no equilibrium at a larger load with all of them intact): the
+    // damage policy breaks at the last converged state, re-equilibrate at the same load, go on.
+    // The step is recorded at the unchanged load factor.
+    if (!nr.converged && damage_ && damage_->breakOnStalls && state_.stallBreaks < damage_->maxStallBreaks) {
+      Thyra::copy(*xConverged_, x.ptr());
+      setLoadFactor(lambda);
+      const auto rep = damage_->breakOnStall(*x, nr.failure);
+      if (rep.brokenBonds > 0 || !rep.detached.empty()) {
+        ++state_.stallBreaks;
+        rec.stallBrokenBonds = rep.brokenBonds;
+        rec.stallStretch = rep.maxStretch;
+        rec.brokenBonds += rep.brokenBonds;
+        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        rec.fragmentParticles += rep.fragmentParticles;
+        note("  step " + std::to_string(step) + ": " + nr.failure);
+        if (!rep.note.empty()) note(rep.note);
+        const std::string why = nr.failure;
+        nr = reequilibrate(*x, lambda, rec);
+        rec.residuals = nr.residuals;
+        if (!nr.converged) nr.failure = "re-equilibration after the stall break (" + why + ") failed: " + nr.failure;
+        increment = stepIncrement;
+      } else {
+        nr.failure += "; " + damage_->nothingToBreak();
+      }
+    } else if (!nr.converged && damage_ && damage_->breakOnStalls) {
+      nr.failure += "; " + damage_->stallLimitReached();
+    }
+    rec.cutbacks = cut;
+    rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
+    rec.newtonIterations = nr.iterations;
+    rec.reactionNormalised = nr.reactionNormalised;
+    rec.atRoundoffFloor = nr.atRoundoffFloor;
+    rec.floor = nr.floorNormalised;
+    rec.elapsed = now() - tStep;
+    if (!nr.converged) rec.residuals = nr.residuals;
+    account(rec);
+    records_.push_back(rec);
+    if (!nr.converged) {
+      ok = false;
+      std::ostringstream s;
+      s << "load step " << step << " (load factor " << rec.loadFactor << ") failed after " << cut
+        << " cut-back(s): " << nr.failure;
+      failure_ = s.str();
+      setLoadFactor(lambda);
+      break;
+    }
+    // Damage (seed 000, Fig. 8): nothing breaks inside the solve; after convergence, break what
+    // the criterion says, re-equilibrate at the same load, and repeat until nothing breaks. Only
+    // then does the load grow.
+    if (damage_) {
+      for (;;) {
+        const auto rep = damage_->breakAfterStep(*x);
+        rec.brokenBonds += rep.brokenBonds;
+        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+        rec.fragmentParticles += rep.fragmentParticles;
+        if (rep.brokenBonds == 0 && rep.detached.empty()) break;
+        if (rec.breakRounds >= damage_->maxBreakRounds) {
+          nr.converged = false;
+          nr.failure = "bonds were still breaking after " + std::to_string(rec.breakRounds) + " re-equilibrations";
+          break;
+        }
+        ++rec.breakRounds;
+        const NewtonResult re = reequilibrate(*x, lambda, rec);
+        rec.newtonIterations += re.iterations;
+        rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
+        if (!re.converged) {
+          nr = re;
+          nr.failure = "re-equilibration after breaking " + std::to_string(rep.brokenBonds) + " bond(s) failed: " + re.failure;
+          break;
+        }
+      }
+      if (!nr.converged) {
+        account(rec);
+        records_.back() = rec;
+        ok = false;
+        failure_ = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
+        break;
+      }
+      rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
+      rec.elapsed = now() - tStep;
+      account(rec);
+      records_.back() = rec;
+      if (rec.brokenBonds > 0 || !rec.detached.empty()) note(damage_->describeStep(rec));
+    }
+    const double previous = records_.size() > 1 ? records_[records_.size() - 2].loadFactor : 0.0;
+    {
+      const StepInfo info{rec, nr, *x, lambda};
+      std::string vetoed;
+      for (auto* o : observers_)
+        if (vetoed.empty()) vetoed = o->vet(info, previous);
+      if (!vetoed.empty()) {
+        ok = false;
+        failure_ = vetoed;
+        lambda = previous;
+        setLoadFactor(lambda);
+        break;
+      }
+    }
+    Thyra::copy(*xConverged_, xPrevious_.ptr());
+    Thyra::copy(*x, xConverged_.ptr());
+    path_.push_back(lambda);
+    lastIncrement = rec.loadFactor - previous;
+    // After easy convergence at a reduced increment, grow back toward the nominal increment.
+    if (options_.adaptive) {
+      if (nr.iterations <= options_.easyIterations) increment = std::min(options_.maxIncrement, 1.5 * increment);
+    } else if (increment < 1.0 / N && nr.iterations <= 6) {
+      increment = std::min(1.0 / N, 2 * increment);
+    }
+    const StepInfo info{rec, nr, *xConverged_, lambda};
+    for (auto* o : observers_) o->accepted(info);
+  }
+  setLoadFactor(lambda);  // the state kept is the last converged one
+  return ok;
+}
+
+std::string LoadStepper::tangent(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& z) {
+  try {
+    auto dfdl = x.clone_v();
+    model_->loadDerivative(x, *dfdl);
+    auto W = model_->create_W_op();
+    auto in = model_->createInArgs();
+    in.set_x(Teuchos::rcpFromRef(x));
+    auto out = model_->createOutArgs();
+    out.set_W_op(W);
+    model_->evalModel(in, out);
+    auto lows = Thyra::linearOpWithSolve(*model_->get_W_factory(), W.getConst());
+    Thyra::scale(-1.0, dfdl.ptr());
+    Thyra::assign(Teuchos::ptrFromRef(z), 0.0);
+    Thyra::SolveCriteria<double> crit;
+    crit.solveMeasureType = Thyra::SolveMeasureType(Thyra::SOLVE_MEASURE_NORM_RESIDUAL, Thyra::SOLVE_MEASURE_NORM_RHS);
+    crit.requestedTol = options_.linearTolerance;
+    const auto st = lows->solve(Thyra::NOTRANS, *dfdl, Teuchos::ptrFromRef(z), Teuchos::constPtr(crit));
+    ++stepLinear_.solves;
+    if (!st.extraParameters.is_null()) stepLinear_.krylovIterations += std::max(0, st.extraParameters->get("Iteration Count", 0));
+    const bool known = st.achievedTol != Thyra::SolveStatus<double>::unknownTolerance();
+    if (st.solveStatus == Thyra::SOLVE_STATUS_UNCONVERGED && !(known && st.achievedTol <= crit.requestedTol)) {
+      ++stepLinear_.failures;
+      return "tangent solve: the linear solver did not converge";
+    }
+  } catch (const std::exception& e) {
+    return std::string("tangent solve failed: ") + e.what();
+  }
+  return "";
+}
+
+}  // namespace perinox

@@ -1,0 +1,298 @@
+// The load stepper on a model that is not peridynamics: n uncoupled nonlinear springs
+//   f_i(x, lambda) = k_i x_i + c x_i^3 - lambda b_i,   W = diag(k_i + 3 c x_i^2),
+// a Thyra model with p(0) = lambda and DfDp = -b, solved by Newton (NOX) with a serial dense
+// direct solver. Each x_i(lambda) is the unique real root of the cubic, so every answer is known.
+// A "damage" policy softens springs stretched past a threshold (k_i -> k_i / 10), which the
+// stepper must re-equilibrate; options, cut-backs and observers are checked on the same model.
+#include <gtest/gtest.h>
+
+#include <Teuchos_ParameterList.hpp>
+#include <Thyra_DefaultSerialDenseLinearOpWithSolveFactory.hpp>
+#include <Thyra_DefaultSpmdVectorSpace.hpp>
+#include <Thyra_DetachedMultiVectorView.hpp>
+#include <Thyra_DetachedVectorView.hpp>
+#include <Thyra_MultiVectorStdOps.hpp>
+#include <Thyra_StateFuncModelEvaluatorBase.hpp>
+#include <Thyra_VectorStdOps.hpp>
+#include <cmath>
+
+#include "perinox/stepping/LoadStepper.hpp"
+
+using namespace perinox;
+using MEB = Thyra::ModelEvaluatorBase;
+
+namespace {
+
+class Springs : public Thyra::StateFuncModelEvaluatorBase<double> {
+ public:
+  Springs(std::vector<double> k, double c, std::vector<double> b, int np = 1)
+      : k(std::move(k)), c(c), b(std::move(b)), np_(np) {
+    space_ = Thyra::defaultSpmdVectorSpace<double>(static_cast<int>(this->k.size()));
+    pSpace_ = Thyra::defaultSpmdVectorSpace<double>(1);
+    nominal_ = createInArgs();
+    auto x0 = Thyra::createMember(space_);
+    Thyra::assign(x0.ptr(), 0.0);
+    nominal_.set_x(x0);
+  }
+  std::vector<double> k;
+  double c;
+  std::vector<double> b;
+  int n() const { return static_cast<int>(k.size()); }
+  /// The exact solution of component i at lambda (Newton on the scalar cubic to round-off).
+  double exact(int i, double lambda) const {
+    double x = lambda * b[i] / k[i];
+    for (int it = 0; it < 100; ++it) x -= (k[i] * x + c * x * x * x - lambda * b[i]) / (k[i] + 3 * c * x * x);
+    return x;
+  }
+
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_x_space() const override { return space_; }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_f_space() const override { return space_; }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> get_p_space(int) const override { return pSpace_; }
+  Teuchos::RCP<const Teuchos::Array<std::string>> get_p_names(int) const override {
+    return Teuchos::rcp(new Teuchos::Array<std::string>(1, "Load Factor"));
+  }
+  MEB::InArgs<double> getNominalValues() const override { return nominal_; }
+  MEB::InArgs<double> createInArgs() const override {
+    MEB::InArgsSetup<double> in;
+    in.setModelEvalDescription("springs");
+    in.set_Np(np_);
+    in.setSupports(MEB::IN_ARG_x);
+    return in;
+  }
+  Teuchos::RCP<Thyra::LinearOpBase<double>> create_W_op() const override { return Thyra::createMembers(space_, n()); }
+  Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> get_W_factory() const override {
+    return Thyra::defaultSerialDenseLinearOpWithSolveFactory<double>();
+  }
+  mutable int evaluations = 0;
+
+ private:
+  MEB::OutArgs<double> createOutArgsImpl() const override {
+    MEB::OutArgsSetup<double> out;
+    out.setModelEvalDescription("springs");
+    out.set_Np_Ng(np_, 0);
+    out.setSupports(MEB::OUT_ARG_f);
+    out.setSupports(MEB::OUT_ARG_W_op);
+    if (np_ > 0) out.setSupports(MEB::OUT_ARG_DfDp, 0, MEB::DerivativeSupport(MEB::DERIV_MV_BY_COL));
+    return out;
+  }
+  void evalModelImpl(const MEB::InArgs<double>& in, const MEB::OutArgs<double>& out) const override {
+    ++evaluations;
+    Thyra::ConstDetachedVectorView<double> x(*in.get_x());
+    const double lambda = np_ == 0 || in.get_p(0).is_null() ? 0.0 : Thyra::get_ele(*in.get_p(0), 0);
+    if (auto f = out.get_f(); !f.is_null()) {
+      Thyra::DetachedVectorView<double> fv(*f);
+      for (int i = 0; i < n(); ++i) fv[i] = k[i] * x[i] + c * x[i] * x[i] * x[i] - lambda * b[i];
+    }
+    if (auto W = out.get_W_op(); !W.is_null()) {
+      auto mv = Teuchos::rcp_dynamic_cast<Thyra::MultiVectorBase<double>>(W, true);
+      Thyra::DetachedMultiVectorView<double> Wv(*mv);
+      for (int i = 0; i < n(); ++i)
+        for (int j = 0; j < n(); ++j) Wv(i, j) = i == j ? k[i] + 3 * c * x[i] * x[i] : 0.0;
+    }
+    if (out.Np() > 0) {
+      auto dfdp = out.get_DfDp(0).getMultiVector();
+      if (!dfdp.is_null()) {
+        const auto column = dfdp->col(0);  // the view must not outlive the column
+        Thyra::DetachedVectorView<double> d(*column);
+        for (int i = 0; i < n(); ++i) d[i] = -b[i];
+      }
+    }
+  }
+  Teuchos::RCP<const Thyra::VectorSpaceBase<double>> space_, pSpace_;
+  MEB::InArgs<double> nominal_;
+  int np_ = 1;
+};
+
+/// The seed's scale for this model: |lambda b|.
+class SpringScale : public ResidualScale {
+ public:
+  SpringScale(const Springs& m, const LoadFactorModel& lm) : m_(m), lm_(lm) {}
+  double scale(const Thyra::VectorBase<double>&, bool& reaction) const override {
+    reaction = false;
+    double s = 0;
+    for (double bi : m_.b) s += bi * bi;
+    return std::abs(lm_.loadFactor()) * std::sqrt(s);
+  }
+
+ private:
+  const Springs& m_;
+  const LoadFactorModel& lm_;
+};
+
+/// Softens spring i (k_i -> k_i / 10) once x_i exceeds the threshold; each spring once.
+class Softening : public DamagePolicy {
+ public:
+  Softening(Springs& m, double threshold) : m_(m), threshold_(threshold), broken_(m.n(), false) {}
+  Breaks breakAfterStep(const Thyra::VectorBase<double>& x) override {
+    Breaks br;
+    Thyra::ConstDetachedVectorView<double> xv(x);
+    for (int i = 0; i < m_.n(); ++i)
+      if (!broken_[i] && xv[i] > threshold_) {
+        broken_[i] = true;
+        m_.k[i] /= 10;
+        ++br.brokenBonds;
+      }
+    return br;
+  }
+  Breaks breakOnStall(const Thyra::VectorBase<double>&, const std::string&) override { return {}; }
+  std::vector<bool> broken() const { return broken_; }
+
+ private:
+  Springs& m_;
+  double threshold_;
+  std::vector<bool> broken_;
+};
+
+struct Rig {
+  Teuchos::RCP<Springs> springs;
+  Teuchos::RCP<LoadFactorModel> model;
+  Teuchos::RCP<NewtonSolver> newton;
+  Rig(std::vector<double> k, double c, std::vector<double> b, int maxIterations = 25) {
+    springs = Teuchos::rcp(new Springs(std::move(k), c, std::move(b)));
+    model = Teuchos::rcp(new LoadFactorModel(springs));
+    NewtonOptions o;
+    o.tolerance = 1e-12;
+    o.maxIterations = maxIterations;
+    newton = Teuchos::rcp(new NewtonSolver(model, Teuchos::rcp(new SpringScale(*springs, *model)), o));
+  }
+  std::function<NewtonResult(Thyra::VectorBase<double>&)> solve() {
+    auto n = newton;
+    return [n](Thyra::VectorBase<double>& x) { return n->solve(x); };
+  }
+};
+
+double maxError(const Springs& m, const Thyra::VectorBase<double>& x, double lambda) {
+  Thyra::ConstDetachedVectorView<double> xv(x);
+  double e = 0;
+  for (int i = 0; i < m.n(); ++i) e = std::max(e, std::abs(xv[i] - m.exact(i, lambda)) / std::abs(m.exact(i, lambda)));
+  return e;
+}
+
+class Recorder : public StepObserver {
+ public:
+  std::vector<double> steps;
+  std::vector<std::string> notes;
+  double vetoAt = 2.0;  // refuse a step whose load factor reaches this
+  void note(const std::string& line) override { notes.push_back(line); }
+  std::string vet(const StepInfo& s, double) override {
+    return s.loadFactor >= vetoAt - 1e-12 ? "vetoed at " + std::to_string(s.loadFactor) : "";
+  }
+  void accepted(const StepInfo& s) override { steps.push_back(s.loadFactor); }
+};
+
+}  // namespace
+
+TEST(LoadStepper, StepsANonPeridynamicModelToItsKnownSolution) {
+  Rig s({1.0, 2.0, 4.0}, 0.5, {1.0, 3.0, -2.0});
+  LoadStepperOptions o;
+  o.loadSteps = 4;
+  o.tangentPredictor = true;
+  LoadStepper stepper(s.model, s.solve(), o);
+  Recorder rec;
+  stepper.addObserver(&rec);
+  ASSERT_TRUE(stepper.run()) << stepper.failure();
+  EXPECT_EQ(stepper.records().size(), 4u);
+  EXPECT_EQ(rec.steps, (std::vector<double>{0.25, 0.5, 0.75, 1.0}));
+  EXPECT_LT(maxError(*s.springs, stepper.converged(), 1.0), 1e-11);
+  // One step in the middle is checked against its own exact state through the previous one.
+  EXPECT_LT(maxError(*s.springs, stepper.previous(), 0.75), 1e-11);
+  for (const auto& r : stepper.records()) {
+    EXPECT_EQ(r.cutbacks, 0);
+    EXPECT_GE(r.newtonIterations, 1);
+    EXPECT_LE(r.newtonIterations, 6);  // the predictor starts each step near its solution
+    EXPECT_EQ(r.linearSolves, r.newtonIterationsAll + (r.step == 1 ? 1 : 0));  // + the tangent predictor
+  }
+}
+
+TEST(LoadStepper, CutsBackAStepThatFailsAndGrowsAgain) {
+  // A stiff cubic from zero in one step: Newton overshoots to lambda b / k and comes back by
+  // about a third per iteration; with 7 allowed the full step fails, the halved increments
+  // converge (each from the last converged state: no predictor).
+  Rig s({1.0, 1.0}, 1.0, {20.0, 15.0}, 7);
+  LoadStepperOptions o;
+  o.loadSteps = 1;
+  o.predictor = false;
+  LoadStepper stepper(s.model, s.solve(), o);
+  Recorder rec;
+  stepper.addObserver(&rec);
+  ASSERT_TRUE(stepper.run()) << stepper.failure();
+  const int cut = stepper.records().front().cutbacks;
+  EXPECT_GT(cut, 0);
+  // Easy steps at the reduced increment double it again: fewer steps than 2^cut.
+  EXPECT_LT(stepper.records().size(), static_cast<std::size_t>(1) << cut);
+  EXPECT_LT(maxError(*s.springs, stepper.converged(), 1.0), 1e-11);
+  EXPECT_FALSE(rec.notes.empty());
+  EXPECT_NE(rec.notes.front().find("cutting the load increment"), std::string::npos) << rec.notes.front();
+  // With no cut-backs allowed the same run stops with one sentence naming the step.
+  Rig t({1.0, 1.0}, 1.0, {20.0, 15.0}, 7);
+  o.maxCutbacks = 0;
+  LoadStepper strict(t.model, t.solve(), o);
+  EXPECT_FALSE(strict.run());
+  EXPECT_NE(strict.failure().find("load step 1 (load factor 1) failed after 0 cut-back(s)"), std::string::npos) << strict.failure();
+}
+
+TEST(LoadStepper, ReequilibratesAfterTheDamagePolicyBreaks) {
+  // Springs 0 and 2 pass the threshold 0.6 on the way and soften; spring 1 stays below it.
+  Rig s({1.0, 4.0, 1.5}, 0.2, {1.5, 1.0, 1.5});
+  Softening policy(*s.springs, 0.6);
+  LoadStepperOptions o;
+  o.loadSteps = 5;
+  LoadStepper stepper(s.model, s.solve(), o);
+  stepper.setDamagePolicy(&policy);
+  ASSERT_TRUE(stepper.run()) << stepper.failure();
+  EXPECT_EQ(policy.broken(), (std::vector<bool>{true, false, true}));
+  long long broken = 0;
+  int rounds = 0;
+  for (const auto& r : stepper.records()) broken += r.brokenBonds, rounds += r.breakRounds;
+  EXPECT_EQ(broken, 2);
+  EXPECT_GE(rounds, 1);
+  // The final state is the equilibrium of the softened springs (k already divided in the model).
+  EXPECT_LT(maxError(*s.springs, stepper.converged(), 1.0), 1e-11);
+}
+
+TEST(LoadStepper, AnObserverCanStopTheRunAndTheStateIsTheLastAcceptedOne) {
+  Rig s({1.0, 2.0}, 0.5, {1.0, 1.0});
+  LoadStepperOptions o;
+  o.loadSteps = 4;
+  LoadStepper stepper(s.model, s.solve(), o);
+  Recorder rec;
+  rec.vetoAt = 0.75;
+  stepper.addObserver(&rec);
+  EXPECT_FALSE(stepper.run());
+  EXPECT_EQ(stepper.failure(), "vetoed at 0.750000");
+  EXPECT_DOUBLE_EQ(stepper.state().loadFactor, 0.5);
+  EXPECT_DOUBLE_EQ(s.model->loadFactor(), 0.5);
+  EXPECT_LT(maxError(*s.springs, stepper.converged(), 0.5), 1e-11);
+}
+
+TEST(LoadStepper, OptionsAreValidatedWithOneSentence) {
+  Teuchos::ParameterList good;
+  good.set("Load Steps", 8);
+  good.set("Adaptive Steps", true);
+  const auto o = LoadStepperOptions::fromParameterList(good, "host.cpp");
+  EXPECT_EQ(o.loadSteps, 8);
+  EXPECT_TRUE(o.adaptive);
+  EXPECT_EQ(o.maxTotalSteps, 160);
+  auto refused = [](Teuchos::ParameterList l, const std::string& part) {
+    try {
+      LoadStepperOptions::fromParameterList(l, "host.cpp");
+      ADD_FAILURE() << "accepted; expected " << part;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+  };
+  Teuchos::ParameterList typo;
+  typo.set("Load Stpes", 3);
+  refused(typo, "host.cpp: unknown load-stepping key 'Load Stpes'");
+  Teuchos::ParameterList zero;
+  zero.set("Load Steps", 0);
+  refused(zero, "'Load Steps' must be between 1 and 1000000");
+  Teuchos::ParameterList type;
+  type.set("Min Increment", 1);
+  refused(type, "'Min Increment' must be of type double");
+  Teuchos::ParameterList nan;
+  nan.set("Max Increment", std::nan(""));
+  refused(nan, "'Max Increment' must lie in (0, 1]");
+  // A model without a load-factor parameter is refused by the wrapper.
+  EXPECT_THROW(LoadFactorModel(Teuchos::rcp(new Springs({1.0}, 0.0, {1.0}, 0))), std::invalid_argument);
+}
