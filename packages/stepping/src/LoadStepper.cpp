@@ -183,6 +183,16 @@ void LoadStepper::note(const std::string& line) {
 
 void LoadStepper::setLoadFactor(double lambda) { model_->setLoadFactor(lambda); }
 
+NewtonResult LoadStepper::counted(const std::function<NewtonResult(Thyra::VectorBase<double>&)>& solve,
+                                  Thyra::VectorBase<double>& x) {
+  NewtonResult r = solve(x);
+  stepWork_ += r.work;
+  stepLinear_.solves += r.linear.solves;
+  stepLinear_.krylovIterations += r.linear.krylovIterations;
+  stepLinear_.failures += r.linear.failures;
+  return r;
+}
+
 // Re-equilibration after a damage break, at load factor lam. The solve from the state before the
 // break first. When the break releases so much that it cannot reach the new equilibrium from
 // there (an inverted F on the way, stagnation), the damaged body is reloaded in growing sub-steps
@@ -194,14 +204,7 @@ void LoadStepper::setLoadFactor(double lambda) { model_->setLoadFactor(lambda); 
 // found to the policy's reload tolerance, and lam lowered to it; the stepping resumes from there
 // (an event-by-event trace of the snap-back).
 NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& lam, StepRecord& rec) {
-  auto run = [&](Thyra::VectorBase<double>& x) {
-    NewtonResult r = reequilibrate_(x);
-    stepWork_ += r.work;
-    stepLinear_.solves += r.linear.solves;
-    stepLinear_.krylovIterations += r.linear.krylovIterations;
-    stepLinear_.failures += r.linear.failures;
-    return r;
-  };
+  auto run = [&](Thyra::VectorBase<double>& x) { return counted(reequilibrate_, x); };
   auto x0 = xs.clone_v();
   NewtonResult first = run(xs);
   if (first.converged || !damage_) return first;
@@ -293,14 +296,7 @@ bool LoadStepper::run() {
     StepRecord rec;
     rec.step = step;
     NewtonResult nr;
-    auto solveOnce = [&](Thyra::VectorBase<double>& xs) {
-      NewtonResult r = solve_(xs);
-      stepWork_ += r.work;
-      stepLinear_.solves += r.linear.solves;
-      stepLinear_.krylovIterations += r.linear.krylovIterations;
-      stepLinear_.failures += r.linear.failures;
-      return r;
-    };
+    auto solveOnce = [&](Thyra::VectorBase<double>& xs) { return counted(solve_, xs); };
     auto account = [&](StepRecord& r) {
       r.newtonIterationsAll = stepWork_;
       r.linearSolves = stepLinear_.solves;

@@ -183,6 +183,8 @@ class LoadStepper {
   std::string tangent(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& z);
   void note(const std::string& line);
   void setLoadFactor(double lambda);
+  /// Runs a solve and adds its work to the step's.
+  NewtonResult counted(const std::function<NewtonResult(Thyra::VectorBase<double>&)>& solve, Thyra::VectorBase<double>& x);
 
   Teuchos::RCP<LoadFactorModel> model_;
   std::function<NewtonResult(Thyra::VectorBase<double>&)> solve_, reequilibrate_;
