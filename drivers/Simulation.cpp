@@ -31,6 +31,7 @@
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
+#include "perinox/stepping/LoadStepper.hpp"
 
 namespace perinox {
 
@@ -679,6 +680,165 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
   }
 }
 
+/// perinox's damage effect as the stepper's damage policy (seed 000, Fig. 8): bonds past s_cr
+/// break after a converged step; with 'Damage/On Stall' = Break Most Stretched, a step that cannot
+/// be converged breaks the most stretched bonds in the softening band.
+class PeridynamicDamage final : public DamagePolicy {
+ public:
+  PeridynamicDamage(PeridynamicEvaluator& ev, const Scene& scene) : ev_(ev), scene_(scene) {
+    maxBreakRounds = scene.maxBreakRounds;
+    breakOnStalls = scene.stallBreak;
+    maxStallBreaks = scene.maxStallBreaks;
+    reloadTolerance = scene.reloadTolerance;
+  }
+  Breaks breakAfterStep(const Thyra::VectorBase<double>& x) override { return breaks(ev_.breakBonds(x)); }
+  Breaks breakOnStall(const Thyra::VectorBase<double>& x, const std::string&) override {
+    const auto& ds = scene_.problem->damageSpec;
+    double smax = 0;
+    Breaks b = breaks(ev_.breakMostStretched(x, scene_.stallBreakTolerance * (ds.sCr - ds.sMin), smax));
+    b.maxStretch = smax;
+    std::ostringstream s;
+    s << "  stall at load factor " << ev_.loadFactor() << ": broke " << b.brokenBonds << " bond(s) at the largest stretch "
+      << smax << " (softening band [" << ds.sMin << ", " << ds.sCr << ")), re-equilibrating";
+    b.note = s.str();
+    return b;
+  }
+  std::string nothingToBreak() const override { return "no intact bond in the softening band to break ('Damage/On Stall')"; }
+  std::string stallLimitReached() const override {
+    return "'Damage/Max Stall Breaks' = " + std::to_string(scene_.maxStallBreaks) + " reached";
+  }
+
+ private:
+  static Breaks breaks(const PeridynamicEvaluator::BreakReport& r) {
+    Breaks b;
+    b.brokenBonds = r.brokenBonds;
+    b.detached = r.detached;
+    b.fragmentParticles = r.fragmentParticles;
+    return b;
+  }
+  PeridynamicEvaluator& ev_;
+  const Scene& scene_;
+};
+
+/// The scene's probes, recorded at every accepted step (collective: every rank).
+class ProbeRecorder final : public StepObserver {
+ public:
+  ProbeRecorder(const PeridynamicEvaluator& ev, const Scene& scene, RunResult& res) : ev_(ev), scene_(scene), res_(res) {}
+  void accepted(const StepInfo& s) override {
+    const auto u = ev_.ownedDisplacements(s.x);
+    for (std::size_t k = 0; k < scene_.probes.size(); ++k)
+      if (scene_.probes[k].quantity != "Profile")
+        res_.probes[k].second.push_back({s.loadFactor, probeValue(ev_, scene_.probes[k], s.x, u)});
+  }
+
+ private:
+  const PeridynamicEvaluator& ev_;
+  const Scene& scene_;
+  RunResult& res_;
+};
+
+/// The console: one line per accepted step (load factor, iterations, residual, time) and the
+/// stepper's notes (cut-backs, stalls, damage), on rank 0 unless quiet.
+class ConsoleLines final : public StepObserver {
+ public:
+  ConsoleLines(const Scene& scene, bool speak) : adr_(scene.solver.method == "ADR"), speak_(speak) {}
+  void note(const std::string& line) override {
+    if (speak_) std::cout << line << "\n";
+  }
+  void accepted(const StepInfo& s) override {
+    if (!speak_) return;
+    CoutFormat keep;
+    const auto& nr = s.result;
+    const auto& rec = s.record;
+    std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(4) << s.loadFactor
+              << (adr_ ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
+              << (adr_ ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
+              << std::scientific << std::setprecision(3)
+              << (nr.residuals.empty() ? 0.0 : (adr_ ? nr.residuals.front() : nr.residuals.back())) << (adr_ ? ", " : "")
+              << (adr_ ? std::to_string(nr.residuals.back()) : std::string())
+              << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
+              << (rec.linearFailures > 0 ? "  unconverged linear solves " + std::to_string(rec.linearFailures) : std::string())
+              << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
+              << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
+  }
+
+ private:
+  bool adr_, speak_;
+};
+
+/// 'Solver/Stability Check': the tangent's negative pivots at each converged step; an unstable
+/// equilibrium stops the run, the last stable state kept.
+class StabilityCheck final : public StepObserver {
+ public:
+  explicit StabilityCheck(PeridynamicEvaluator& ev) : ev_(ev) {}
+  std::string vet(const StepInfo& s, double previous) override {
+    const int neg = ev_.negativePivots(s.x);
+    if (neg == 0) return "";
+    std::ostringstream m;
+    if (neg > 0)
+      m << "loss of stability: the equilibrium found at load factor " << s.loadFactor << " is unstable (the tangent has "
+        << neg << " negative pivot(s)): the path passed a bifurcation or limit point between load factors " << previous
+        << " and " << s.loadFactor << "; the last stable state is written";
+    else
+      m << "stability check impossible at load factor " << s.loadFactor << ": the tangent is not symmetric or its LDL^T failed";
+    return m.str();
+  }
+
+ private:
+  PeridynamicEvaluator& ev_;
+};
+
+/// Checkpoints after accepted steps, every --checkpoint-steps steps and/or --checkpoint-seconds.
+class CheckpointWriter final : public StepObserver {
+ public:
+  CheckpointWriter(const RunOptions& options, const FolderPlan& folder, const Scene& scene, const PeridynamicEvaluator& ev,
+                   const Teuchos::Comm<int>& comm, const LoadStepper& stepper, const RunResult& res, double t0,
+                   double elapsedBefore, int segment)
+      : options_(options), folder_(folder), scene_(scene), ev_(ev), comm_(comm), stepper_(stepper), res_(res), t0_(t0),
+        elapsedBefore_(elapsedBefore), segment_(segment), last_(now()) {}
+  void accepted(const StepInfo& s) override {
+    const auto& state = stepper_.state();
+    int due = (options_.checkpointSteps > 0 && state.step % options_.checkpointSteps == 0) ||
+              (options_.checkpointSeconds > 0 && now() - last_ >= options_.checkpointSeconds);
+    Teuchos::broadcast(comm_, 0, Teuchos::outArg(due));  // clocks differ between ranks
+    if (!due) return;
+    nlohmann::json st;
+    st["format"] = 1;
+    st["scene"] = resolvedSceneText(scene_);
+    st["step"] = state.step;
+    st["lambda"] = state.loadFactor;
+    st["increment"] = state.increment;
+    st["last_increment"] = state.lastIncrement;
+    st["stall_breaks"] = state.stallBreaks;
+    st["elapsed_s"] = now() - t0_ + elapsedBefore_;
+    st["segment"] = segment_;
+    nlohmann::json steps = nlohmann::json::array();
+    for (const auto& sr : stepper_.records()) steps.push_back(stepJson(sr, true, false));
+    st["steps"] = steps;
+    st["path_load_factors"] = stepper_.path();
+    nlohmann::json probes = nlohmann::json::array();
+    for (const auto& pr : res_.probes) probes.push_back(pr.second);
+    st["probes"] = probes;
+    st["detached"] = ev_.detachedParticles();
+    writeCheckpoint(folder_, st, ev_, s.x, stepper_.previous(), comm_);
+    last_ = now();
+    if (comm_.getRank() == 0 && !options_.quiet)
+      std::cout << "  checkpoint after step " << state.step << " in " << folder_.target << std::endl;
+  }
+
+ private:
+  const RunOptions& options_;
+  const FolderPlan& folder_;
+  const Scene& scene_;
+  const PeridynamicEvaluator& ev_;
+  const Teuchos::Comm<int>& comm_;
+  const LoadStepper& stepper_;
+  const RunResult& res_;
+  double t0_, elapsedBefore_;
+  int segment_;
+  double last_;
+};
+
 }  // namespace
 
 RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
@@ -761,111 +921,58 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   nopt.verbosity = scene.solver.verbosity;
   nopt.floorFactor = scene.solver.floorFactor;
   nopt.stagnationStop = scene.solver.stagnationStop;
-  NewtonSolver newton(evaluator, nopt);
+  // The load factor is the evaluator's parameter p(0): the stepper's wrapper passes it to every
+  // evaluation, and keeps the evaluator's own (its diagnostics, damage and outputs use it).
+  auto model = Teuchos::rcp(new LoadFactorModel(evaluator));
+  model->onLoadFactor([ev = evaluator.get()](double lambda) { ev->setLoadFactor(lambda); });
+  auto newton = Teuchos::rcp(new NewtonSolver(model, Teuchos::rcp(new EvaluatorResidualScale(evaluator)), nopt));
+  auto newtonSolve = [newton](Thyra::VectorBase<double>& xs) { return newton->solve(xs); };
+  auto adrSolve = [&](Thyra::VectorBase<double>& xs) {
+    AdrOptions ao;
+    ao.tolerance = scene.solver.adrTolerance;
+    ao.maxIterations = scene.solver.adrMaxIterations;
+    ao.massSafety = scene.solver.adrMassSafety;
+    AdrResult ar;
+    try {
+      ar = solveAdr(*evaluator, xs, ao);
+    } catch (const EvaluationError& e) {
+      ar.failure = std::string("dynamic relaxation reached an invalid state: ") + e.what();
+    }
+    NewtonResult nr;
+    nr.converged = ar.converged;
+    nr.iterations = static_cast<int>(std::min<long long>(ar.iterations, 2000000000));
+    nr.work = ar.iterations;
+    nr.residuals = {ar.e1, ar.e2};
+    nr.failure = ar.failure;
+    return nr;
+  };
+  const bool adr = scene.solver.method == "ADR";
 
-  auto x = Thyra::createMember(evaluator->get_x_space());
-  Thyra::assign(x.ptr(), 0.0);
-  auto xConverged = x->clone_v();
-  // Predictor: extrapolate the last converged increment (x_n - x_{n-1}) to the new load
-  // increment. It starts Newton near the new equilibrium, which matters under large rotation.
-  auto xPrevious = x->clone_v();
-  double lastIncrement = 0.0;
-  // The first step has no increment to extrapolate. When displacements are prescribed, starting
-  // Newton from the unloaded body puts the whole prescribed jump into the bonds next to the
-  // loaded particles (at 150 x 50 on the damaged plate: stretch 0.0067 there, past s_cr, the
-  // tangent nearly singular, the first step stagnated and inverted F). The tangent predictor
-  // moves the body with the load first: x = x_0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda,
-  // one linear solve at the unloaded state. Pure dead loads do not need it (it equals Newton's
-  // first iteration there).
-  const bool prescribedMotion = scene.problem->rotates() || scene.problem->prescribesDisplacement();
-  Teuchos::RCP<Thyra::VectorBase<double>> firstTangent;
-  LinearSolveCounts tangentCounts;
+  LoadStepperOptions so;
+  so.loadSteps = scene.solver.loadSteps;
+  so.maxCutbacks = scene.solver.maxCutbacks;
+  so.minIncrement = scene.solver.minIncrement;
+  so.maxTotalSteps = scene.solver.maxTotalSteps;
+  so.adaptive = scene.solver.adaptive;
+  so.easyIterations = scene.solver.easyIterations;
+  so.maxIncrement = scene.solver.maxIncrement;
+  so.predictor = scene.solver.predictor;
+  // The first step with prescribed motion starts along the tangent dx/dlambda (at 150 x 50 on the
+  // damaged plate, starting from the unloaded body put stretch 0.0067 into the bonds next to the
+  // loaded particles, past s_cr; the first step stagnated). Dead loads do not need it (it equals
+  // Newton's first iteration there).
+  so.tangentPredictor = !adr && (scene.problem->rotates() || scene.problem->prescribesDisplacement());
+  so.keyPrefix = "Solver/";
+  LoadStepper stepper(model, adr ? std::function<NewtonResult(Thyra::VectorBase<double>&)>(adrSolve)
+                                 : std::function<NewtonResult(Thyra::VectorBase<double>&)>(newtonSolve),
+                      so);
+  stepper.setReequilibrationSolve(newtonSolve);
+  PeridynamicDamage damage(*evaluator, scene);
+  if (scene.problem->damage) stepper.setDamagePolicy(&damage);
 
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
 
-  // Re-equilibration after bonds broke, at the load factor lam the evaluator is set to. Newton
-  // from the state before the break first. When the break releases so much that Newton cannot
-  // reach the new equilibrium from there (an inverted F on the way, stagnation), reload the
-  // damaged body in growing sub-steps (the softening law depends only on the current stretch, so
-  // the equilibrium with a given set of intact bonds does not depend on the path): from the state
-  // scaled to 0.9 of the load (a snap-back usually lowers it by a few per cent), else from half of
-  // it, else from zero. If the damaged body cannot carry lam (the reload stalls at a limit point:
-  // the snap-back of a running crack under displacement control), the state at the highest load
-  // reached is returned, that load found to 'Damage/Reload Tolerance' of lam, and lam lowered to
-  // it; the load stepping resumes from there (an event-by-event trace of the snap-back).
-  auto reequilibrate = [&](Thyra::VectorBase<double>& xs, double& lam, int& reloads) {
-    auto x0 = xs.clone_v();
-    NewtonResult first = newton.solve(xs);
-    if (first.converged || !scene.problem->damage) return first;
-    int iters = first.iterations;
-    double bestMu = 0;
-    auto xBest = xs.clone_v();
-    NewtonResult bestR;
-    for (double start : {0.9, 0.7, 0.5, 0.0}) {
-      Thyra::V_StV(Teuchos::ptrFromRef(xs), start, *x0);
-      double mu = start, inc = 0.25 * (1.0 - start);
-      NewtonResult r;
-      r.converged = true;  // zero load with zero displacement is an equilibrium
-      if (start > 0) {
-        evaluator->setLoadFactor(start * lam);
-        r = newton.solve(xs);
-        iters += r.iterations;
-        ++reloads;
-        if (!r.converged) continue;
-      }
-      auto xc = xs.clone_v();
-      NewtonResult rc = r;
-      while (mu < 1.0 - 1e-12) {
-        const double t = std::min(1.0, mu + inc);
-        evaluator->setLoadFactor(t * lam);
-        Thyra::copy(*xc, Teuchos::ptrFromRef(xs));
-        r = newton.solve(xs);
-        iters += r.iterations;
-        ++reloads;
-        if (r.converged) {
-          mu = t;
-          Thyra::copy(xs, xc.ptr());
-          rc = r;
-          inc *= 1.5;
-        } else if (t - mu <= scene.reloadTolerance) {
-          break;  // the limit load lies in [mu, t)
-        } else {
-          inc = 0.5 * (t - mu);  // halve the sub-step that failed (not the grown one t clamped)
-        }
-      }
-      if (mu > bestMu) {
-        bestMu = mu;
-        Thyra::copy(*xc, xBest.ptr());
-        bestR = rc;
-      }
-      break;  // the sub-stepping ran: its limit is the damaged body's
-    }
-    if (!(bestMu > 0)) {
-      evaluator->setLoadFactor(lam);
-      Thyra::copy(*x0, Teuchos::ptrFromRef(xs));
-      first.iterations = iters;
-      first.failure += " (reloading the damaged body from 0.9 and half of the load and from zero failed too)";
-      return first;
-    }
-    Thyra::copy(*xBest, Teuchos::ptrFromRef(xs));
-    if (bestMu < 1.0) {
-      if (rank == 0 && !options.quiet)
-        std::cout << "    the damaged body cannot carry load factor " << lam << " (snap-back): equilibrium at "
-                  << bestMu * lam << "\n";
-      lam *= bestMu;
-    }
-    evaluator->setLoadFactor(lam);
-    bestR.iterations = iters;
-    return bestR;
-  };
-
-  const int N = scene.solver.loadSteps;
-  int stallBreaks = 0;
-  double lambda = 0.0;
-  double increment = 1.0 / N;
-  int step = 0;
-  bool ok = true;
   if (rank == 0 && !options.quiet)
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs
               << " free DOFs, " << nranks << " rank(s), linear solver " << scene.solver.linearSolverName << std::endl;
@@ -873,291 +980,51 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   int segment = 1;
   if (resume) {
     const auto& st = resume->state;
-    step = st.at("step");
-    lambda = st.at("lambda");
-    increment = st.at("increment");
-    lastIncrement = st.at("last_increment");
-    stallBreaks = st.at("stall_breaks");
+    StepperState ss;
+    ss.step = st.at("step");
+    ss.loadFactor = st.at("lambda");
+    ss.increment = st.at("increment");
+    ss.lastIncrement = st.at("last_increment");
+    ss.stallBreaks = st.at("stall_breaks");
     elapsedBefore = st.at("elapsed_s");
     segment = st.at("segment").get<int>() + 1;
-    for (const auto& sj : st.at("steps")) res.steps.push_back(stepFromJson(sj));
-    res.pathLoadFactors = st.at("path_load_factors").get<std::vector<double>>();
+    std::vector<StepRecord> records;
+    for (const auto& sj : st.at("steps")) records.push_back(stepFromJson(sj));
     for (std::size_t k = 0; k < res.probes.size(); ++k)
       res.probes[k].second = st.at("probes").at(k).get<std::vector<std::pair<double, std::vector<double>>>>();
     evaluator->restoreDamage(resume->broken, st.at("detached").get<std::vector<long long>>(), resume->frozen);
-    evaluator->setOwnedFreeValues(*xConverged, resume->x);
-    evaluator->setOwnedFreeValues(*xPrevious, resume->xPrevious);
-    Thyra::copy(*xConverged, x.ptr());
-    evaluator->setLoadFactor(lambda);
+    auto xc = Thyra::createMember(evaluator->get_x_space()), xp = Thyra::createMember(evaluator->get_x_space());
+    evaluator->setOwnedFreeValues(*xc, resume->x);
+    evaluator->setOwnedFreeValues(*xp, resume->xPrevious);
+    stepper.resume(ss, std::move(records), st.at("path_load_factors").get<std::vector<double>>(), *xc, *xp);
     if (rank == 0 && !options.quiet)
-      std::cout << "resumed from " << options.restartFrom << " after step " << step << " at load factor " << lambda
-                << " (" << evaluator->detachedParticles().size() << " detached particle(s))" << std::endl;
+      std::cout << "resumed from " << options.restartFrom << " after step " << ss.step << " at load factor "
+                << ss.loadFactor << " (" << evaluator->detachedParticles().size() << " detached particle(s))" << std::endl;
   }
-  double lastCheckpoint = now();
-  if (arcLength) ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
-  while (!arcLength && lambda < 1.0 - 1e-12) {
-    if (step >= scene.solver.maxTotalSteps) {
-      ok = false;
-      std::ostringstream s;
-      s << "reached 'Solver/Max Total Steps' = " << scene.solver.maxTotalSteps << " at load factor " << lambda
-        << " (the load increment had fallen to " << increment << "): the solver can no longer advance the load";
-      res.failure = s.str();
-      break;
-    }
-    ++step;
-    tangentCounts = LinearSolveCounts();  // the first step's tangent predictor counts in that step only
-    const double tStep = now();
-    const long long newtonBefore = newton.totalNewtonIterations();
-    const LinearSolveCounts linearBefore = newton.totalLinear();
-    StepRecord rec;
-    rec.step = step;
-    NewtonResult nr;
-    long long adrIterations = 0;  // ADR: its iterations, every attempt of the step
-    // The work of the step so far, every attempt included (ADR's iterations count as Newton's).
-    auto account = [&](StepRecord& r) {
-      r.newtonIterationsAll = newton.totalNewtonIterations() - newtonBefore + adrIterations;
-      r.linearSolves = newton.totalLinear().solves - linearBefore.solves + tangentCounts.solves;
-      r.krylovIterations =
-          newton.totalLinear().krylovIterations - linearBefore.krylovIterations + tangentCounts.krylovIterations;
-      r.linearFailures = newton.totalLinear().failures - linearBefore.failures + tangentCounts.failures;
-    };
-    int cut = 0;
-    const double stepIncrement = increment;
-    if (scene.solver.predictor && lastIncrement == 0 && step == 1 && prescribedMotion &&
-        scene.solver.method != "ADR") {
-      ArcLengthSolver path(evaluator, ArcLengthOptions());
-      firstTangent = xConverged->clone_v();
-      const std::string why = path.tangent(*xConverged, lambda, *firstTangent);
-      tangentCounts = path.totalLinear();
-      if (!why.empty()) {
-        firstTangent = Teuchos::null;  // Newton starts from the unloaded body instead
-        if (rank == 0 && !options.quiet)
-          std::cout << "  step 1: no tangent predictor (" << why << "); Newton starts from the unloaded body\n";
-      }
-    }
-    for (;;) {
-      const double target = std::min(1.0, lambda + increment);
-      evaluator->setLoadFactor(target);
-      Thyra::copy(*xConverged, x.ptr());
-      if (scene.solver.predictor && lastIncrement > 0) {
-        // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
-        const double a = (target - lambda) / lastIncrement;
-        Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged, -a, *xPrevious);
-      } else if (firstTangent && step == 1) {
-        Thyra::Vp_StV(x.ptr(), target - lambda, *firstTangent);
-      }
-      if (scene.solver.method == "ADR") {
-        AdrOptions ao;
-        ao.tolerance = scene.solver.adrTolerance;
-        ao.maxIterations = scene.solver.adrMaxIterations;
-        ao.massSafety = scene.solver.adrMassSafety;
-        AdrResult ar;
-        try {
-          ar = solveAdr(*evaluator, *x, ao);
-        } catch (const EvaluationError& e) {
-          ar.failure = std::string("dynamic relaxation reached an invalid state: ") + e.what();
-        }
-        nr = NewtonResult();
-        nr.converged = ar.converged;
-        nr.iterations = static_cast<int>(std::min<long long>(ar.iterations, 2000000000));
-        adrIterations += ar.iterations;
-        nr.residuals = {ar.e1, ar.e2};
-        nr.failure = ar.failure;
-      } else {
-        nr = newton.solve(*x);
-      }
-      rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
-      if (nr.converged) {
-        lambda = target;
-        break;
-      }
-      Thyra::copy(*xConverged, x.ptr());
-      if (cut >= scene.solver.maxCutbacks) break;
-      if (0.5 * increment < scene.solver.minIncrement / N) {
-        nr.failure += "; the load increment would fall below 'Solver/Min Increment'";
-        break;
-      }
-      ++cut;
-      increment *= 0.5;
-      rec.residuals.clear();
-      if (rank == 0 && !options.quiet)
-        std::cout << "  step " << step << ": " << nr.failure << "; cutting the load increment to "
-                  << increment << "\n";
-    }
-    // Damage, On Stall = Break Most Stretched: the step cannot be converged even at the smallest
-    // increment (softening bonds snap back under displacement control: there is no equilibrium at a
-    // larger load with all of them intact). Break, at the last converged state, the most stretched
-    // intact bond(s) in the softening band, re-equilibrate at the same load and go on (the bonds past
-    // s_cr then break in the usual loop below). The step is recorded at the unchanged load factor.
-    if (!nr.converged && scene.problem->damage && scene.stallBreak && stallBreaks < scene.maxStallBreaks) {
-      Thyra::copy(*xConverged, x.ptr());
-      evaluator->setLoadFactor(lambda);
-      const auto& ds = scene.problem->damageSpec;
-      double smax = 0;
-      const auto rep = evaluator->breakMostStretched(*x, scene.stallBreakTolerance * (ds.sCr - ds.sMin), smax);
-      if (rep.brokenBonds > 0 || !rep.detached.empty()) {
-        ++stallBreaks;
-        rec.stallBrokenBonds = rep.brokenBonds;
-        rec.stallStretch = smax;
-        rec.brokenBonds += rep.brokenBonds;
-        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
-        rec.fragmentParticles += rep.fragmentParticles;
-        if (rank == 0 && !options.quiet)
-          std::cout << "  step " << step << ": " << nr.failure << "\n  stall at load factor " << lambda << ": broke "
-                    << rep.brokenBonds << " bond(s) at the largest stretch " << smax << " (softening band ["
-                    << ds.sMin << ", " << ds.sCr << ")), re-equilibrating\n";
-        const std::string why = nr.failure;
-        nr = reequilibrate(*x, lambda, rec.reloadSteps);
-        rec.residuals = nr.residuals;
-        if (!nr.converged)
-          nr.failure = "re-equilibration after the stall break (" + why + ") failed: " + nr.failure;
-        increment = stepIncrement;
-      } else {
-        nr.failure += "; no intact bond in the softening band to break ('Damage/On Stall')";
-      }
-    } else if (!nr.converged && scene.problem->damage && scene.stallBreak) {
-      nr.failure += "; 'Damage/Max Stall Breaks' = " + std::to_string(scene.maxStallBreaks) + " reached";
-    }
-    rec.cutbacks = cut;
-    rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
-    rec.newtonIterations = nr.iterations;
-    rec.reactionNormalised = nr.reactionNormalised;
-    rec.atRoundoffFloor = nr.atRoundoffFloor;
-    rec.floor = nr.floorNormalised;
-    rec.elapsed = now() - tStep;
-    if (!nr.converged) rec.residuals = nr.residuals;
-    account(rec);
-    res.steps.push_back(rec);
-    if (!nr.converged) {
-      ok = false;
-      std::ostringstream s;
-      s << "load step " << step << " (load factor " << rec.loadFactor << ") failed after " << cut
-        << " cut-back(s): " << nr.failure;
-      res.failure = s.str();
-      evaluator->setLoadFactor(lambda);
-      break;
-    }
-    // Damage (seed 000, Fig. 8): bonds never fail inside Newton; after convergence, break every
-    // bond past s_cr, detach particles left without an invertible shape tensor, re-equilibrate at
-    // the same load, and repeat until nothing breaks. Only then does the load grow.
-    if (scene.problem->damage) {
-      for (;;) {
-        const auto rep = evaluator->breakBonds(*x);
-        rec.brokenBonds += rep.brokenBonds;
-        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
-        rec.fragmentParticles += rep.fragmentParticles;
-        if (rep.brokenBonds == 0 && rep.detached.empty()) break;
-        if (rec.breakRounds >= scene.maxBreakRounds) {
-          nr.converged = false;
-          nr.failure = "bonds were still breaking after " + std::to_string(rec.breakRounds) + " re-equilibrations";
-          break;
-        }
-        ++rec.breakRounds;
-        const NewtonResult re = reequilibrate(*x, lambda, rec.reloadSteps);
-        rec.newtonIterations += re.iterations;
-        rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
-        if (!re.converged) {
-          nr = re;
-          nr.failure = "re-equilibration after breaking " + std::to_string(rep.brokenBonds) + " bond(s) failed: " + re.failure;
-          break;
-        }
-      }
-      if (!nr.converged) {
-        account(rec);
-        res.steps.back() = rec;
-        ok = false;
-        res.failure = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
-        break;
-      }
-      rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
-      rec.elapsed = now() - tStep;
-      account(rec);
-      res.steps.back() = rec;
-      if (rank == 0 && !options.quiet && (rec.brokenBonds > 0 || !rec.detached.empty()))
-        std::cout << "    damage: " << rec.brokenBonds << " bond(s) broken, " << rec.breakRounds
-                  << " re-equilibration(s), " << rec.detached.size() << " particle(s) detached"
-                  << (rec.fragmentParticles > 0 ? " (" + std::to_string(rec.fragmentParticles) +
-                                                      " in free-floating fragments: frozen where they broke off)"
-                                                : std::string())
-                  << "\n";
-    }
-    if (scene.solver.stabilityCheck) {
-      const int neg = evaluator->negativePivots(*x);
-      if (neg != 0) {
-        ok = false;
-        std::ostringstream s;
-        const double previous = res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0;
-        if (neg > 0)
-          s << "loss of stability: the equilibrium found at load factor " << lambda << " is unstable (the tangent has "
-            << neg << " negative pivot(s)): the path passed a bifurcation or limit point between load factors "
-            << previous << " and " << lambda << "; the last stable state is written";
-        else
-          s << "stability check impossible at load factor " << lambda << ": the tangent is not symmetric or its LDL^T failed";
-        res.failure = s.str();
-        lambda = previous;
-        evaluator->setLoadFactor(lambda);
-        break;
-      }
-    }
-    Thyra::copy(*xConverged, xPrevious.ptr());
-    Thyra::copy(*x, xConverged.ptr());
-    res.pathLoadFactors.push_back(lambda);
-    lastIncrement = rec.loadFactor - (res.steps.size() > 1 ? res.steps[res.steps.size() - 2].loadFactor : 0.0);
-    const auto u = evaluator->ownedDisplacements(*x);
-    for (std::size_t k = 0; k < scene.probes.size(); ++k)
-      if (scene.probes[k].quantity != "Profile")
-        res.probes[k].second.push_back({lambda, probeValue(*evaluator, scene.probes[k], *x, u)});
-    if (rank == 0 && !options.quiet) {
-      CoutFormat keep;
-      std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(4) << lambda
-                << (scene.solver.method == "ADR" ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
-                << (scene.solver.method == "ADR" ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
-                << std::scientific << std::setprecision(3)
-                << (nr.residuals.empty() ? 0.0 : (scene.solver.method == "ADR" ? nr.residuals.front() : nr.residuals.back()))
-                << (scene.solver.method == "ADR" ? ", " : "")
-                << (scene.solver.method == "ADR" ? std::to_string(nr.residuals.back()) : std::string())
-                << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
-                << (rec.linearFailures > 0 ? "  unconverged linear solves " + std::to_string(rec.linearFailures)
-                                           : std::string())
-                << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
-                << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
-    }
-    // After easy convergence at a reduced increment, grow back toward the nominal increment.
-    if (scene.solver.adaptive) {
-      // Adaptive stepping: grow after easy steps, up to Max Increment (cut-backs shrink it).
-      if (nr.iterations <= scene.solver.easyIterations) increment = std::min(scene.solver.maxIncrement, 1.5 * increment);
-    } else if (increment < 1.0 / N && nr.iterations <= 6) {
-      increment = std::min(1.0 / N, 2 * increment);
-    }
-    if (checkpoints) {
-      int due = (options.checkpointSteps > 0 && step % options.checkpointSteps == 0) ||
-                (options.checkpointSeconds > 0 && now() - lastCheckpoint >= options.checkpointSeconds);
-      Teuchos::broadcast(*comm, 0, Teuchos::outArg(due));  // clocks differ between ranks
-      if (due) {
-        nlohmann::json st;
-        st["format"] = 1;
-        st["scene"] = resolvedSceneText(scene);
-        st["step"] = step;
-        st["lambda"] = lambda;
-        st["increment"] = increment;
-        st["last_increment"] = lastIncrement;
-        st["stall_breaks"] = stallBreaks;
-        st["elapsed_s"] = now() - t0 + elapsedBefore;
-        st["segment"] = segment;
-        nlohmann::json steps = nlohmann::json::array();
-        for (const auto& sr : res.steps) steps.push_back(stepJson(sr, true, false));
-        st["steps"] = steps;
-        st["path_load_factors"] = res.pathLoadFactors;
-        nlohmann::json probes = nlohmann::json::array();
-        for (const auto& pr : res.probes) probes.push_back(pr.second);
-        st["probes"] = probes;
-        st["detached"] = evaluator->detachedParticles();
-        writeCheckpoint(checkpointFolder, st, *evaluator, *xConverged, *xPrevious, *comm);
-        lastCheckpoint = now();
-        if (rank == 0 && !options.quiet)
-          std::cout << "  checkpoint after step " << step << " in " << checkpointFolder.target << std::endl;
-      }
-    }
+
+  // What each accepted step is seen by: the probes, the console, the stability check, checkpoints.
+  ProbeRecorder probes(*evaluator, scene, res);
+  ConsoleLines console(scene, rank == 0 && !options.quiet);
+  StabilityCheck stability(*evaluator);
+  CheckpointWriter checkpointer(options, checkpointFolder, scene, *evaluator, *comm, stepper, res, t0, elapsedBefore, segment);
+  stepper.addObserver(&probes);
+  stepper.addObserver(&console);
+  if (scene.solver.stabilityCheck) stepper.addObserver(&stability);
+  if (checkpoints) stepper.addObserver(&checkpointer);
+
+  auto xConverged = Thyra::createMember(evaluator->get_x_space());
+  double lambda = 0.0;
+  bool ok = true;
+  if (arcLength) {
+    Thyra::assign(xConverged.ptr(), 0.0);
+    ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
+  } else {
+    ok = stepper.run();
+    res.steps = stepper.records();
+    res.pathLoadFactors = stepper.path();
+    res.failure = stepper.failure();
+    lambda = stepper.state().loadFactor;
+    Thyra::copy(stepper.converged(), xConverged.ptr());
   }
   res.converged = ok;
   evaluator->setLoadFactor(lambda);  // the state written is the last converged one

@@ -8,38 +8,9 @@
 #include <vector>
 
 #include "perinox/io/Scene.hpp"
+#include "perinox/stepping/LoadStepper.hpp"  // StepRecord
 
 namespace perinox {
-
-struct StepRecord {
-  int step = 0;
-  double loadFactor = 0;
-  int newtonIterations = 0;        // iterations of the solve that converged the step (and its
-                                   // re-equilibrations)
-  long long newtonIterationsAll = 0;  // every attempt of the step, cut-backs included
-  long long linearSolves = 0;      // linear systems solved in the step, all attempts
-  long long krylovIterations = 0;  // Krylov iterations spent on them (0 with a direct solver)
-  long long linearFailures = 0;    // of those, solves the linear solver reported unconverged
-                                   // (Newton went on with the inexact direction)
-  std::vector<double> residuals;
-  bool reactionNormalised = false;
-  bool atRoundoffFloor = false;    // converged on the round-off floor rather than the tolerance
-  double floor = 0;                // that floor, normalised
-  int cutbacks = 0;
-  double elapsed = 0;
-  long long brokenBonds = 0;       // damage: bonds broken after this step converged
-  int breakRounds = 0;             // damage: re-equilibrations after breaking
-  std::vector<long long> detached; // particles detached in this step
-  long long fragmentParticles = 0; // of those, particles of free-floating fragments
-  long long stallBrokenBonds = 0;  // damage, On Stall = Break Most Stretched: bonds broken because
-                                   // the step could not be converged (included in brokenBonds)
-  double stallStretch = 0;         // the largest stretch at that break
-  int reloadSteps = 0;             // damage: sub-steps of reloading the damaged body when Newton could
-                                   // not re-equilibrate directly after a break
-  double arcLength = 0;            // arc-length continuation: the arc of this step
-  int negativePivots = -2;         // arc-length continuation with Stability Check: the tangent's
-                                   // negative pivots at the converged point (-2: not computed)
-};
 
 struct LimitPoint {
   int step = 0;                    // the step at which the load factor peaked
