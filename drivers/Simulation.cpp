@@ -839,81 +839,249 @@ class CheckpointWriter final : public StepObserver {
   double last_;
 };
 
-}  // namespace
+/// What summary.json reports beyond the run's result: where it ran and what it held.
+struct RunFacts {
+  int ranks = 1;
+  int segment = 1;                 // 1, or the runs a checkpointed run was split into
+  nlohmann::json resumedFrom;      // null unless resumed
+  std::vector<std::string> effects;
+  long long matrixBytes = 0;       // sparse matrices held, all ranks
+  double rssMax = 0, rssSum = 0;   // peak resident memory, MiB: the largest rank's and the sum
+  std::vector<long long> detached;
+};
 
-RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
-                   const RunOptions& options) {
-  const double t0 = now();
-  const int rank = comm->getRank(), nranks = comm->getSize();
-  RunResult res;
-  res.outputDir = options.outputDir;
-  const bool arcLength = scene.solver.continuation == "Arc Length";
-  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
-  if (arcLength && (checkpoints || !options.restartFrom.empty()))
-    throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
-                                "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
+/// The per-rank particle CSVs gathered into fields.csv (for plotting), the parts removed.
+void gatherFieldsCsv(const std::string& staging, int nranks) {
+  std::ofstream all(staging + "/fields.csv");
+  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
+  for (int r = 0; r < nranks; ++r) {
+    const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
+    std::ifstream in(part);
+    all << in.rdbuf();
+    in.close();
+    fs::remove(part);
+  }
+  if (!all) throw std::runtime_error("cannot write '" + staging + "/fields.csv'");
+}
 
-  // Where the results and checkpoints go, checked first (README, "Output folders"): a folder that
-  // is not perinox's, the scene, the checkpoint being resumed, '.', a file or a device is refused
-  // before any work, on every rank with rank 0's sentence.
-  const FolderPlan output = folderNames(options.outputDir, FolderKind::Output, "--output");
-  const std::string checkpointOption = options.checkpointDir.empty() ? "the checkpoint folder" : "--checkpoint-dir";
-  const FolderPlan checkpointFolder = folderNames(
-      options.checkpointDir.empty() ? output.target + ".checkpoint" : options.checkpointDir, FolderKind::Checkpoint, checkpointOption);
-  agreed(*comm, [&] {
-    if (rank != 0) return;
-    std::vector<ProtectedPath> keep{{scene.file, "the scene file"}, {options.restartFrom, "the checkpoint to resume from"}};
-    planFolder(options.outputDir, FolderKind::Output, "--output", keep);
-    if (checkpoints) {
-      checkDistinct(output, planFolder(checkpointFolder.target, FolderKind::Checkpoint, checkpointOption, {keep[0]}));
+/// Profiles: the final state of every particle of a region (e.g. u_x along an axis).
+void writeProfiles(const Scene& scene, const std::string& staging) {
+  for (const auto& probe : scene.probes) {
+    if (probe.quantity != "Profile") continue;
+    std::ifstream in(staging + "/fields.csv");
+    std::ostringstream out;
+    std::string line;
+    std::getline(in, line);
+    out << line << '\n';
+    while (std::getline(in, line)) {
+      const long long id = std::stoll(line.substr(0, line.find(',')));
+      if (std::binary_search(probe.particles.begin(), probe.particles.end(), static_cast<int>(id))) out << line << '\n';
     }
-  });
+    std::string fname = probe.name;
+    std::replace(fname.begin(), fname.end(), ' ', '_');
+    writeFileAtomic(staging + "/profile_" + fname + ".csv", out.str());
+  }
+}
 
-  // Everything that can reject the set-up happens before the output folder exists: the linear
-  // solver's list first (a misspelt Belos, Ifpack2 or MueLu key would be ignored by Trilinos).
+/// summary.json: the run, its steps and totals, the probes, the errors against the reference.
+nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFacts& facts) {
+  using nlohmann::json;
+  const bool arcLength = scene.solver.continuation == "Arc Length";
+  json j;
+  j["scene"] = scene.file;
+  j["title"] = scene.title;
+  j["ranks"] = facts.ranks;
+  j["particles"] = res.particles;
+  j["dofs"] = res.dofs;
+  j["converged"] = res.converged;
+  if (!res.converged) j["failure"] = res.failure;
+  j["wall_time_s"] = res.wallTime;
+  j["run_segments"] = facts.segment;
+  if (!facts.resumedFrom.is_null()) j["resumed_from"] = facts.resumedFrom;
+  j["effects"] = facts.effects;
+  j["linear_solver"] = scene.solver.linearSolverName;
+  j["jacobian"] = scene.solver.jacobian;
+  if (scene.solver.jacobian != "Assembled") j["preconditioner_matrix"] = scene.solver.preconditionerMatrix;
+  j["matrix_bytes"] = facts.matrixBytes;
+  j["peak_rss_mib_max_rank"] = facts.rssMax;
+  j["peak_rss_mib_all_ranks"] = facts.rssSum;
+  j["method"] = scene.solver.method;
+  j["tolerance"] = scene.solver.tolerance;
+  json steps = json::array();
+  for (const auto& s : res.steps) steps.push_back(stepJson(s, scene.problem->damage, arcLength));
+  j["steps"] = steps;
+  // The run's totals, one pass over the steps: the whole work (Newton iterations of every
+  // attempt, ADR's iterations for ADR; linear solves; Krylov iterations, 0 with a direct
+  // solver) and, with damage, the bonds broken, the stall events and the fragment particles.
+  long long newtonAll = 0, solves = 0, krylov = 0, linearFailures = 0, broken = 0, stallBonds = 0, fragments = 0;
+  int stallSteps = 0;
+  for (const auto& s : res.steps) {
+    newtonAll += s.newtonIterationsAll;
+    solves += s.linearSolves;
+    krylov += s.krylovIterations;
+    linearFailures += s.linearFailures;
+    broken += s.brokenBonds;
+    stallBonds += s.stallBrokenBonds;
+    stallSteps += s.stallBrokenBonds > 0;
+    fragments += s.fragmentParticles;
+  }
+  j["newton_iterations_total"] = newtonAll;
+  j["linear_solves_total"] = solves;
+  j["krylov_iterations_total"] = krylov;
+  j["linear_failures_total"] = linearFailures;
+  const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed
+  if (!inexact.empty()) j["warnings"] = {inexact};
+  if (scene.problem->damage) {
+    j["broken_bonds_total"] = broken;
+    j["stall_broken_bonds_total"] = stallBonds;
+    j["stall_breaks"] = stallSteps;
+    j["detached_particles"] = facts.detached;
+    j["fragment_particles_total"] = fragments;  // of the detached: cut off from every prescribed DOF
+  }
+  json probes = json::object();
+  for (std::size_t k = 0; k < res.probes.size(); ++k) {
+    if (scene.probes[k].quantity == "Profile") continue;
+    json list = json::array();
+    const std::string key = scene.probes[k].quantity == "Reaction" ? "reaction" : "displacement";
+    for (const auto& [lf, v] : res.probes[k].second) list.push_back({{"load_factor", lf}, {key, v}});
+    probes[res.probes[k].first] = list;
+  }
+  j["probes"] = probes;
+  j["continuation"] = scene.solver.continuation;
+  if (arcLength) {
+    json lp = json::array();
+    for (const auto& l : res.limitPoints)
+      lp.push_back({{"step", l.step}, {"load_factor", l.loadFactor}, {"deflection", l.deflection}});
+    j["limit_points"] = lp;
+  }
+  if (res.hasError) j["errors"] = {{"e_u", res.errorU}, {"reference", scene.reference.type}};
+  return j;
+}
+
+/// path.csv: the load factor and every probe at every converged step.
+std::string pathCsv(const Scene& scene, const RunResult& res) {
+  std::ostringstream path;
+  path << "step,load_factor";
+  const char* comp = "xyz";
+  for (std::size_t k = 0; k < res.probes.size(); ++k)
+    if (scene.probes[k].quantity != "Profile")
+      for (int c = 0; c < scene.problem->dim(); ++c) {
+        std::string name = res.probes[k].first;
+        std::replace(name.begin(), name.end(), ' ', '_');
+        path << ',' << name << '_' << comp[c];
+      }
+  path << '\n' << std::setprecision(15);
+  for (std::size_t i = 0; i < res.pathLoadFactors.size(); ++i) {
+    path << i + 1 << ',' << res.pathLoadFactors[i];
+    for (std::size_t k = 0; k < res.probes.size(); ++k)
+      if (scene.probes[k].quantity != "Profile")
+        for (double v : res.probes[k].second[i].second) path << ',' << v;
+    path << '\n';
+  }
+  return path.str();
+}
+
+/// newton.csv: every step's normalised residual per iteration.
+std::string newtonCsv(const RunResult& res) {
+  std::ostringstream csv;
+  csv << std::setprecision(6) << std::scientific << "step,iteration,residual\n";
+  for (const auto& s : res.steps)
+    for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
+  return csv.str();
+}
+
+/// The residual table of seed 000's Tables 2-4: one column per step, one row per iteration.
+void printResidualTable(const RunResult& res) {
+  CoutFormat keep;
+  std::size_t rows = 0;
+  for (const auto& s : res.steps) rows = std::max(rows, s.residuals.size());
+  std::cout << "\nNewton residuals (normalised) per load step:\n   iter";
+  for (const auto& s : res.steps) std::cout << std::setw(11) << ("step " + std::to_string(s.step));
+  std::cout << "\n";
+  for (std::size_t it = 0; it < rows; ++it) {
+    std::cout << std::setw(7) << it;
+    for (const auto& s : res.steps) {
+      if (it < s.residuals.size())
+        std::cout << std::setw(11) << std::scientific << std::setprecision(3) << s.residuals[it];
+      else
+        std::cout << std::setw(11) << "-";
+    }
+    std::cout << "\n";
+  }
+}
+
+/// PNGs by the plot script, run without a shell (the paths go to python as they are).
+void drawPlots(const std::string& staging, const RunOptions& options) {
+  // Debian's python3 carries python3-matplotlib; another python3 earlier on PATH may not.
+  const char* py = std::getenv("PERINOX_PYTHON");
+  const std::string python = py && *py ? py : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+  if (runProgram({python, options.plotScript, staging}, staging + "/plot.log") != 0 && !options.quiet)
+    std::cout << "note: plots were not drawn (see plot.log; python3-matplotlib missing?)\n";
+}
+
+/// Rank 0: everything the output folder holds besides the per-rank fields, into the staging folder.
+void writeResults(const Scene& scene, const RunResult& res, const RunFacts& facts, const RunOptions& options,
+                  const std::string& staging, int nranks) {
+  gatherFieldsCsv(staging, nranks);
+  writeProfiles(scene, staging);
+  writeFileAtomic(staging + "/path.csv", pathCsv(scene, res));
+  writeFileAtomic(staging + "/summary.json",
+                  summaryJson(scene, res, facts).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  writeFileAtomic(staging + "/newton.csv", newtonCsv(res));
+  if (!options.quiet) printResidualTable(res);
+  if (scene.output.plots && !options.plotScript.empty()) drawPlots(staging, options);
+}
+
+/// The scene's evaluator with its linear solver (the list checked first: a misspelt Belos,
+/// Ifpack2 or MueLu key would be ignored by Trilinos) and Jacobian mode.
+Teuchos::RCP<PeridynamicEvaluator> buildEvaluator(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
   validateLinearSolverList(*scene.solver.linearSolver, scene.solver.linearSolverName == "custom"
                                                            ? std::string()
                                                            : "preset '" + scene.solver.linearSolverName + "'");
   auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
   const auto linearParams = Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver));
   if (scene.solver.jacobian == "Assembled" || scene.solver.method != "Newton") {
-    evaluator->set_W_factory(buildLinearSolverFactory(linearParams, nranks));
+    evaluator->set_W_factory(buildLinearSolverFactory(linearParams, comm->getSize()));
   } else {
     // Matrix-free: Belos without a preconditioner of its own; the model builds the
     // preconditioner from the matrix the scene names.
-    auto split = buildSplitLinearSolver(linearParams, nranks);
+    auto split = buildSplitLinearSolver(linearParams, comm->getSize());
     evaluator->set_W_factory(split.krylov);
     evaluator->setJacobian(scene.solver.jacobian == "Matrix-Free" ? JacobianMode::MatrixFree : JacobianMode::JacobianFree,
                            scene.solver.preconditionerMatrix == "Assembled" ? PreconditionerMatrix::Assembled
                                                                             : PreconditionerMatrix::Neighbours,
                            split.preconditioner, scene.solver.jfnkLambda);
   }
-  res.particles = scene.problem->disc.size();
-  res.dofs = evaluator->numFreeDofs();
-  std::optional<Checkpoint> resume;
-  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles);
+  return evaluator;
+}
 
-  const std::string staging = output.staging;
-  // A run that ends with an error leaves no half-written folder: the staging folder goes with it
-  // (unless it holds finished results that could not be moved into place).
-  bool keepStaging = false;
-  struct StagingGuard {
-    const std::string& path;
-    const bool& keep;
-    bool active;
-    ~StagingGuard() {
-      std::error_code ec;
-      if (active && !keep && fs::is_directory(fs::symlink_status(path, ec))) fs::remove_all(path, ec);
-    }
-  } stagingGuard{staging, keepStaging, rank == 0};
-  agreed(*comm, [&] {
-    if (rank != 0) return;
-    openStaging(output);
-    std::ostringstream xml;
-    Teuchos::writeParameterListToXmlOStream(*scene.resolved, xml);
-    writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
-  });
+/// Peak resident memory (the largest rank's and the sum, MiB) and the sparse matrices held.
+void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& comm, RunFacts& facts) {
+  double rss = 0;
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) == 0) rss = ru.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, rss, Teuchos::outArg(facts.rssMax));
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, rss, Teuchos::outArg(facts.rssSum));
+  long long bytes = static_cast<long long>(ev.matrixBytes());
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, bytes, Teuchos::outArg(facts.matrixBytes));
+}
 
+/// The solve's outcome: the last converged state and its load factor.
+struct Solved {
+  Teuchos::RCP<Thyra::VectorBase<double>> x;
+  double loadFactor = 0.0;
+  bool converged = false;
+  double elapsedBefore = 0.0;  // wall time of the earlier segments of a resumed run
+  int segment = 1;             // 1, or the runs a checkpointed run was split into
+};
+
+/// Load stepping (LoadStepper with perinox's damage policy and observers) or arc-length
+/// continuation from zero load or a checkpoint; fills res's steps, probes and path.
+Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& evaluator, const RunOptions& options,
+                  const FolderPlan& checkpointFolder, const std::optional<Checkpoint>& resume, RunResult& res, double t0) {
+  const auto comm = evaluator->comm();
+  const int rank = comm->getRank(), nranks = comm->getSize();
+  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
   NewtonOptions nopt;
   nopt.tolerance = scene.solver.tolerance;
   nopt.maxIterations = scene.solver.maxIterations;
@@ -1012,20 +1180,88 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   if (scene.solver.stabilityCheck) stepper.addObserver(&stability);
   if (checkpoints) stepper.addObserver(&checkpointer);
 
-  auto xConverged = Thyra::createMember(evaluator->get_x_space());
-  double lambda = 0.0;
-  bool ok = true;
-  if (arcLength) {
-    Thyra::assign(xConverged.ptr(), 0.0);
-    ok = arcLengthContinuation(scene, evaluator, *xConverged, lambda, res, options.quiet, rank);
+  Solved out;
+  out.x = Thyra::createMember(evaluator->get_x_space());
+  out.elapsedBefore = elapsedBefore;
+  out.segment = segment;
+  if (scene.solver.continuation == "Arc Length") {
+    Thyra::assign(out.x.ptr(), 0.0);
+    out.converged = arcLengthContinuation(scene, evaluator, *out.x, out.loadFactor, res, options.quiet, rank);
   } else {
-    ok = stepper.run();
+    out.converged = stepper.run();
     res.steps = stepper.records();
     res.pathLoadFactors = stepper.path();
     res.failure = stepper.failure();
-    lambda = stepper.state().loadFactor;
-    Thyra::copy(stepper.converged(), xConverged.ptr());
+    out.loadFactor = stepper.state().loadFactor;
+    Thyra::copy(stepper.converged(), out.x.ptr());
   }
+  return out;
+}
+
+}  // namespace
+
+RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                   const RunOptions& options) {
+  const double t0 = now();
+  const int rank = comm->getRank(), nranks = comm->getSize();
+  RunResult res;
+  res.outputDir = options.outputDir;
+  const bool arcLength = scene.solver.continuation == "Arc Length";
+  const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
+  if (arcLength && (checkpoints || !options.restartFrom.empty()))
+    throw std::invalid_argument("checkpoints and restarts belong to load stepping: arc-length continuation "
+                                "('Solver/Continuation = Arc Length') cannot be checkpointed or resumed");
+
+  // Where the results and checkpoints go, checked first (README, "Output folders"): a folder that
+  // is not perinox's, the scene, the checkpoint being resumed, '.', a file or a device is refused
+  // before any work, on every rank with rank 0's sentence.
+  const FolderPlan output = folderNames(options.outputDir, FolderKind::Output, "--output");
+  const std::string checkpointOption = options.checkpointDir.empty() ? "the checkpoint folder" : "--checkpoint-dir";
+  const FolderPlan checkpointFolder = folderNames(
+      options.checkpointDir.empty() ? output.target + ".checkpoint" : options.checkpointDir, FolderKind::Checkpoint, checkpointOption);
+  agreed(*comm, [&] {
+    if (rank != 0) return;
+    std::vector<ProtectedPath> keep{{scene.file, "the scene file"}, {options.restartFrom, "the checkpoint to resume from"}};
+    planFolder(options.outputDir, FolderKind::Output, "--output", keep);
+    if (checkpoints) {
+      checkDistinct(output, planFolder(checkpointFolder.target, FolderKind::Checkpoint, checkpointOption, {keep[0]}));
+    }
+  });
+
+  // Everything that can reject the set-up happens before the output folder exists: the linear
+  // solver's list first (a misspelt Belos, Ifpack2 or MueLu key would be ignored by Trilinos).
+  auto evaluator = buildEvaluator(scene, comm);
+  res.particles = scene.problem->disc.size();
+  res.dofs = evaluator->numFreeDofs();
+  std::optional<Checkpoint> resume;
+  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles);
+
+  const std::string staging = output.staging;
+  // A run that ends with an error leaves no half-written folder: the staging folder goes with it
+  // (unless it holds finished results that could not be moved into place).
+  bool keepStaging = false;
+  struct StagingGuard {
+    const std::string& path;
+    const bool& keep;
+    bool active;
+    ~StagingGuard() {
+      std::error_code ec;
+      if (active && !keep && fs::is_directory(fs::symlink_status(path, ec))) fs::remove_all(path, ec);
+    }
+  } stagingGuard{staging, keepStaging, rank == 0};
+  agreed(*comm, [&] {
+    if (rank != 0) return;
+    openStaging(output);
+    std::ostringstream xml;
+    Teuchos::writeParameterListToXmlOStream(*scene.resolved, xml);
+    writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
+  });
+
+  const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0);
+  const auto& xConverged = solved.x;
+  const double lambda = solved.loadFactor, elapsedBefore = solved.elapsedBefore;
+  const int segment = solved.segment;
+  const bool ok = solved.converged;
   res.converged = ok;
   evaluator->setLoadFactor(lambda);  // the state written is the last converged one
 
@@ -1037,176 +1273,16 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   }
   agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks); });
   res.wallTime = now() - t0 + elapsedBefore;
-  // Peak resident memory: the largest rank's and the sum over ranks (MiB).
-  double rss = 0, rssMax = 0, rssSum = 0;
-  {
-    struct rusage ru;
-    if (getrusage(RUSAGE_SELF, &ru) == 0) rss = ru.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
-  }
-  Teuchos::reduceAll(*comm, Teuchos::REDUCE_MAX, rss, Teuchos::outArg(rssMax));
-  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, rss, Teuchos::outArg(rssSum));
-  long long matrixBytes = static_cast<long long>(evaluator->matrixBytes()), matrixBytesAll = 0;
-  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, matrixBytes, Teuchos::outArg(matrixBytesAll));
-  comm->barrier();
-
+  RunFacts facts;
+  measureFootprint(*evaluator, *comm, facts);
+  facts.ranks = nranks;
+  facts.segment = segment;
+  if (resume) facts.resumedFrom = {{"checkpoint", options.restartFrom}, {"step", resume->state.at("step")}};
+  facts.effects = evaluator->model().effectNames();
+  facts.detached = evaluator->detachedParticles();
   agreed(*comm, [&] {
     if (rank != 0) return;
-    const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed
-    // Gather per-rank particle CSVs into one file for plotting.
-    {
-      std::ofstream all(staging + "/fields.csv");
-      all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
-      for (int r = 0; r < nranks; ++r) {
-        const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
-        std::ifstream in(part);
-        all << in.rdbuf();
-        in.close();
-        fs::remove(part);
-      }
-    }
-    // Profiles: the final state of every particle of a region (e.g. u_x along an axis).
-    for (const auto& probe : scene.probes) {
-      if (probe.quantity != "Profile") continue;
-      std::ifstream in(staging + "/fields.csv");
-      std::ostringstream out;
-      std::string line;
-      std::getline(in, line);
-      out << line << '\n';
-      while (std::getline(in, line)) {
-        const long long id = std::stoll(line.substr(0, line.find(',')));
-        if (std::binary_search(probe.particles.begin(), probe.particles.end(), static_cast<int>(id))) out << line << '\n';
-      }
-      std::string fname = probe.name;
-      std::replace(fname.begin(), fname.end(), ' ', '_');
-      writeFileAtomic(staging + "/profile_" + fname + ".csv", out.str());
-    }
-    using nlohmann::json;
-    json j;
-    j["scene"] = scene.file;
-    j["title"] = scene.title;
-    j["ranks"] = nranks;
-    j["particles"] = res.particles;
-    j["dofs"] = res.dofs;
-    j["converged"] = res.converged;
-    if (!res.converged) j["failure"] = res.failure;
-    j["wall_time_s"] = res.wallTime;
-    j["run_segments"] = segment;  // 1, or the runs a checkpointed run was split into
-    if (resume) j["resumed_from"] = {{"checkpoint", options.restartFrom}, {"step", resume->state.at("step")}};
-    j["effects"] = evaluator->model().effectNames();
-    j["linear_solver"] = scene.solver.linearSolverName;
-    j["jacobian"] = scene.solver.jacobian;
-    if (scene.solver.jacobian != "Assembled") j["preconditioner_matrix"] = scene.solver.preconditionerMatrix;
-    j["matrix_bytes"] = matrixBytesAll;  // sparse matrices held (all ranks)
-    j["peak_rss_mib_max_rank"] = rssMax;
-    j["peak_rss_mib_all_ranks"] = rssSum;
-    j["method"] = scene.solver.method;
-    j["tolerance"] = scene.solver.tolerance;
-    json steps = json::array();
-    std::ostringstream csv;
-    csv << std::setprecision(6) << std::scientific << "step,iteration,residual\n";
-    for (const auto& s : res.steps) {
-      steps.push_back(stepJson(s, scene.problem->damage, arcLength));
-      for (std::size_t it = 0; it < s.residuals.size(); ++it) csv << s.step << ',' << it << ',' << s.residuals[it] << '\n';
-    }
-    j["steps"] = steps;
-    {
-      // The run's totals, one pass over the steps: the whole work (Newton iterations of every
-      // attempt, ADR's iterations for ADR; linear solves; Krylov iterations, 0 with a direct
-      // solver) and, with damage, the bonds broken, the stall events and the fragment particles.
-      long long newtonAll = 0, solves = 0, krylov = 0, linearFailures = 0, broken = 0, stallBonds = 0, fragments = 0;
-      int stallSteps = 0;
-      for (const auto& s : res.steps) {
-        newtonAll += s.newtonIterationsAll;
-        solves += s.linearSolves;
-        krylov += s.krylovIterations;
-        linearFailures += s.linearFailures;
-        broken += s.brokenBonds;
-        stallBonds += s.stallBrokenBonds;
-        stallSteps += s.stallBrokenBonds > 0;
-        fragments += s.fragmentParticles;
-      }
-      j["newton_iterations_total"] = newtonAll;
-      j["linear_solves_total"] = solves;
-      j["krylov_iterations_total"] = krylov;
-      j["linear_failures_total"] = linearFailures;
-      if (!inexact.empty()) j["warnings"] = {inexact};
-      if (scene.problem->damage) {
-        j["broken_bonds_total"] = broken;
-        j["stall_broken_bonds_total"] = stallBonds;
-        j["stall_breaks"] = stallSteps;
-        j["detached_particles"] = evaluator->detachedParticles();
-        j["fragment_particles_total"] = fragments;  // of the detached: cut off from every prescribed DOF
-      }
-    }
-    json probes = json::object();
-    for (std::size_t k = 0; k < res.probes.size(); ++k) {
-      if (scene.probes[k].quantity == "Profile") continue;
-      json list = json::array();
-      const std::string key = scene.probes[k].quantity == "Reaction" ? "reaction" : "displacement";
-      for (const auto& [lf, v] : res.probes[k].second) list.push_back({{"load_factor", lf}, {key, v}});
-      probes[res.probes[k].first] = list;
-    }
-    j["probes"] = probes;
-    j["continuation"] = scene.solver.continuation;
-    if (arcLength) {
-      json lp = json::array();
-      for (const auto& l : res.limitPoints)
-        lp.push_back({{"step", l.step}, {"load_factor", l.loadFactor}, {"deflection", l.deflection}});
-      j["limit_points"] = lp;
-    }
-    // The path: load factor and every probe at every converged step.
-    {
-      std::ostringstream path;
-      path << "step,load_factor";
-      const char* comp = "xyz";
-      for (std::size_t k = 0; k < res.probes.size(); ++k)
-        if (scene.probes[k].quantity != "Profile")
-          for (int c = 0; c < scene.problem->dim(); ++c) {
-            std::string name = res.probes[k].first;
-            std::replace(name.begin(), name.end(), ' ', '_');
-            path << ',' << name << '_' << comp[c];
-          }
-      path << '\n' << std::setprecision(15);
-      for (std::size_t i = 0; i < res.pathLoadFactors.size(); ++i) {
-        path << i + 1 << ',' << res.pathLoadFactors[i];
-        for (std::size_t k = 0; k < res.probes.size(); ++k)
-          if (scene.probes[k].quantity != "Profile")
-            for (double v : res.probes[k].second[i].second) path << ',' << v;
-        path << '\n';
-      }
-      writeFileAtomic(staging + "/path.csv", path.str());
-    }
-    if (res.hasError) j["errors"] = {{"e_u", res.errorU}, {"reference", scene.reference.type}};
-    writeFileAtomic(staging + "/summary.json", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-    writeFileAtomic(staging + "/newton.csv", csv.str());
-
-    // The residual table of seed 000's Tables 2-4: one column per step, one row per iteration.
-    if (!options.quiet) {
-      CoutFormat keep;
-      std::size_t rows = 0;
-      for (const auto& s : res.steps) rows = std::max(rows, s.residuals.size());
-      std::cout << "\nNewton residuals (normalised) per load step:\n   iter";
-      for (const auto& s : res.steps) std::cout << std::setw(11) << ("step " + std::to_string(s.step));
-      std::cout << "\n";
-      for (std::size_t it = 0; it < rows; ++it) {
-        std::cout << std::setw(7) << it;
-        for (const auto& s : res.steps) {
-          if (it < s.residuals.size())
-            std::cout << std::setw(11) << std::scientific << std::setprecision(3) << s.residuals[it];
-          else
-            std::cout << std::setw(11) << "-";
-        }
-        std::cout << "\n";
-      }
-    }
-    if (scene.output.plots && !options.plotScript.empty()) {
-      // Debian's python3 carries python3-matplotlib; another python3 earlier on PATH may not.
-      // Run without a shell: the paths go to python as they are, whatever characters they hold.
-      const char* py = std::getenv("PERINOX_PYTHON");
-      const std::string python = py && *py ? py : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
-      if (runProgram({python, options.plotScript, staging}, staging + "/plot.log") != 0 && !options.quiet)
-        std::cout << "note: plots were not drawn (see plot.log; python3-matplotlib missing?)\n";
-    }
+    writeResults(scene, res, facts, options, staging, nranks);
     try {
       commitFolder(output);
     } catch (const OutputPathError&) {
@@ -1216,6 +1292,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     stagingGuard.active = false;
     if (!options.quiet) {
       CoutFormat keep;
+      const std::string inexact = inexactSolvesWarning(res.steps);
       if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
       if (!inexact.empty()) std::cout << "note: " << inexact << "\n";
       std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir
