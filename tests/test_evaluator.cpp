@@ -253,6 +253,12 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
     P->fixedMask[0] = 4;  // component z in 2D
     expectRefused(P, "fixedMask[0]");
   }
+  {
+    // Only x prescribed on the left strip: the body can slide in y.
+    auto P = makeProblem(2, 3.015, 0.0, false);
+    for (auto& m : P->fixedMask) m &= 1u;
+    expectRefused(P, "do not prevent rigid-body motion");
+  }
   // The unchanged problem is accepted.
   EXPECT_NO_THROW(PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, true)));
 }

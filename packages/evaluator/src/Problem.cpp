@@ -1,4 +1,6 @@
 // ProblemSpec's own checks (Problem.hpp), free of Trilinos headers.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -30,6 +32,31 @@ void positive(double v, const char* name) {
 }
 
 }  // namespace
+
+bool preventsRigidMotion(const ProblemSpec& P) {
+  const Discretization& d = P.disc;
+  const int dim = d.dim;
+  const int nm = dim == 1 ? 1 : (dim == 2 ? 3 : 6);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nm, nm);
+  const Vec3 c = 0.5 * (d.boxLower + d.boxUpper);
+  for (int p = 0; p < d.size(); ++p)
+    for (int a = 0; a < dim; ++a) {
+      if (!P.isFixed(p, a)) continue;
+      Eigen::VectorXd row = Eigen::VectorXd::Zero(nm);
+      row[a] = 1;  // translation a
+      const Vec3 x = (d.X[p] - c) / std::max(d.dx, 1e-300);
+      if (dim == 2) row[2] = a == 0 ? -x[1] : x[0];
+      if (dim == 3) {
+        // rotations about x, y, z: omega x X
+        row[3] = Vec3(1, 0, 0).cross(x)[a];
+        row[4] = Vec3(0, 1, 0).cross(x)[a];
+        row[5] = Vec3(0, 0, 1).cross(x)[a];
+      }
+      M += row * row.transpose();
+    }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
+  return es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff());
+}
 
 void validateProblem(const ProblemSpec& P) {
   const Discretization& d = P.disc;
@@ -77,6 +104,9 @@ void validateProblem(const ProblemSpec& P) {
   if (!std::isfinite(P.rotation.angle) || !P.rotation.center.allFinite() || !P.rotation.axis.allFinite())
     refuse("rotation has a non-finite angle, centre or axis");
   if (P.rotates() && std::abs(P.rotation.axis.norm() - 1.0) > 1e-9) refuse("rotation.axis must be a unit vector");
+  if (!preventsRigidMotion(P))
+    refuse("the prescribed DOFs (fixedMask) do not prevent rigid-body motion: a translation or rotation of the whole "
+           "body is free; prescribe more components");
 }
 
 }  // namespace perinox

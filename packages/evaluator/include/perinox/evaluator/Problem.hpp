@@ -53,9 +53,14 @@ struct ProblemSpec {
   }
 };
 
+/// Whether the prescribed DOFs (fixedMask) remove every rigid-body mode (translations and
+/// rotations about the body's centre): the modes restricted to the prescribed DOFs have full rank.
+bool preventsRigidMotion(const ProblemSpec& problem);
+
 /// Checks a problem built in C++ (or from a scene) for what the evaluator cannot work with: array
 /// sizes against the particle count and dimension, finite coordinates, volumes, loads and material
-/// constants, a horizon of at least one spacing, consistent effect parameters. Throws
+/// constants, a horizon of at least one spacing, consistent effect parameters, and that the
+/// prescribed DOFs leave no rigid-body mode free (preventsRigidMotion). Throws
 /// std::invalid_argument with one sentence naming the field ("ProblemSpec: ...") otherwise. The
 /// evaluator's constructor calls it, so a host program gets the errors a scene gets.
 void validateProblem(const ProblemSpec& problem);
