@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -32,6 +33,7 @@
 #include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
 #include "perinox/stepping/LoadStepper.hpp"
+#include "perinox/stepping/PeridynamicDamage.hpp"
 
 namespace perinox {
 
@@ -680,46 +682,6 @@ bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEva
   }
 }
 
-/// perinox's damage effect as the stepper's damage policy (seed 000, Fig. 8): bonds past s_cr
-/// break after a converged step; with 'Damage/On Stall' = Break Most Stretched, a step that cannot
-/// be converged breaks the most stretched bonds in the softening band.
-class PeridynamicDamage final : public DamagePolicy {
- public:
-  PeridynamicDamage(PeridynamicEvaluator& ev, const Scene& scene) : ev_(ev), scene_(scene) {
-    maxBreakRounds = scene.maxBreakRounds;
-    breakOnStalls = scene.stallBreak;
-    maxStallBreaks = scene.maxStallBreaks;
-    reloadTolerance = scene.reloadTolerance;
-  }
-  Breaks breakAfterStep(const Thyra::VectorBase<double>& x) override { return breaks(ev_.breakBonds(x)); }
-  Breaks breakOnStall(const Thyra::VectorBase<double>& x, const std::string&) override {
-    const auto& ds = scene_.problem->damageSpec;
-    double smax = 0;
-    Breaks b = breaks(ev_.breakMostStretched(x, scene_.stallBreakTolerance * (ds.sCr - ds.sMin), smax));
-    b.maxStretch = smax;
-    std::ostringstream s;
-    s << "  stall at load factor " << ev_.loadFactor() << ": broke " << b.brokenBonds << " bond(s) at the largest stretch "
-      << smax << " (softening band [" << ds.sMin << ", " << ds.sCr << ")), re-equilibrating";
-    b.note = s.str();
-    return b;
-  }
-  std::string nothingToBreak() const override { return "no intact bond in the softening band to break ('Damage/On Stall')"; }
-  std::string stallLimitReached() const override {
-    return "'Damage/Max Stall Breaks' = " + std::to_string(scene_.maxStallBreaks) + " reached";
-  }
-
- private:
-  static Breaks breaks(const PeridynamicEvaluator::BreakReport& r) {
-    Breaks b;
-    b.brokenBonds = r.brokenBonds;
-    b.detached = r.detached;
-    b.fragmentParticles = r.fragmentParticles;
-    return b;
-  }
-  PeridynamicEvaluator& ev_;
-  const Scene& scene_;
-};
-
 /// The scene's probes, recorded at every accepted step (collective: every rank).
 class ProbeRecorder final : public StepObserver {
  public:
@@ -1135,8 +1097,17 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
                                  : std::function<NewtonResult(Thyra::VectorBase<double>&)>(newtonSolve),
                       so);
   stepper.setReequilibrationSolve(newtonSolve);
-  PeridynamicDamage damage(*evaluator, scene);
-  if (scene.problem->damage) stepper.setDamagePolicy(&damage);
+  std::unique_ptr<PeridynamicDamage> damage;
+  if (scene.problem->damage) {
+    PeridynamicDamageOptions d;
+    d.maxBreakRounds = scene.maxBreakRounds;
+    d.breakOnStalls = scene.stallBreak;
+    d.maxStallBreaks = scene.maxStallBreaks;
+    d.stallBreakTolerance = scene.stallBreakTolerance;
+    d.reloadTolerance = scene.reloadTolerance;
+    damage = std::make_unique<PeridynamicDamage>(*evaluator, d);
+    stepper.setDamagePolicy(damage.get());
+  }
 
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
