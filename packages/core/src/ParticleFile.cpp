@@ -26,6 +26,9 @@ bool parseDouble(const std::string& tok, double& out) {
   return endp != s && *endp == '\0';
 }
 
+/// A token for a message: cut to 40 characters.
+std::string shown(const std::string& tok) { return tok.size() > 40 ? tok.substr(0, 40) + "..." : tok; }
+
 std::string num(double v) {
   std::ostringstream os;
   os.precision(10);
@@ -59,6 +62,7 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
   long lineNo = 0;
   while (std::getline(in, text)) {
     ++lineNo;
+    if (text.find('\0') != std::string::npos) fail(path, lineNo, "contains a NUL byte (a particle file is text)");
     const std::size_t hash = text.find('#');
     if (hash != std::string::npos) text.erase(hash);
     std::istringstream ls(text);
@@ -67,8 +71,8 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
     while (ls >> tok) {
       if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
       if (!parseDouble(tok, v[n]))
-        fail(path, lineNo, "'" + tok + "' is not a number (expected \"x y z volume [block]\")");
-      if (!std::isfinite(v[n])) fail(path, lineNo, "'" + tok + "' is not a finite number");
+        fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected \"x y z volume [block]\")");
+      if (!std::isfinite(v[n])) fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
       ++n;
     }
     if (n == 0) continue;  // blank or comment-only line
