@@ -8,12 +8,28 @@
 #include <Teuchos_AbstractFactoryStd.hpp>
 #include <Thyra_Ifpack2PreconditionerFactory.hpp>
 #include <Tpetra_CrsMatrix.hpp>
+#include <sstream>
 #include <stdexcept>
 
 namespace perinox {
 
 namespace {
 using Node = Tpetra::Map<int, long long>::node_type;
+
+/// Stratimikos' validation message in one line of at most 300 characters: Teuchos spreads it
+/// over lines (the reason, the sublist, the valid values one a line, a throw count) and, for an
+/// unknown key, lists every valid parameter of the sublist.
+std::invalid_argument invalidParameters(const std::exception& e) {
+  std::string out, line;
+  std::istringstream in(e.what());
+  while (std::getline(in, line)) {
+    const auto b = line.find_first_not_of(" \t{}");
+    if (b == std::string::npos || line.compare(b, 12, "Throw number") == 0) continue;
+    out += (out.empty() ? "" : " ") + line.substr(b, line.find_last_not_of(" \t{}") - b + 1);
+  }
+  if (out.size() > 300) out = out.substr(0, 297) + "...";
+  return std::invalid_argument("invalid linear solver parameters: " + out);
+}
 
 void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder) {
   using Base = Thyra::PreconditionerFactoryBase<double>;
@@ -66,7 +82,7 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
   try {
     builder.setParameterList(params);
   } catch (const std::exception& e) {
-    throw std::invalid_argument(std::string("invalid linear solver parameters: ") + e.what());
+    throw invalidParameters(e);
   }
   return builder.createLinearSolveStrategy("");
 }
@@ -86,7 +102,7 @@ SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterLi
     try {
       builder.setParameterList(Teuchos::rcp(new Teuchos::ParameterList(*params)));
     } catch (const std::exception& e) {
-      throw std::invalid_argument(std::string("invalid linear solver parameters: ") + e.what());
+      throw invalidParameters(e);
     }
     s.preconditioner = builder.createPreconditioningStrategy("");
   }
