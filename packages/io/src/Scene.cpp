@@ -3,10 +3,11 @@
 #include "perinox/io/Scene.hpp"
 
 #include <Teuchos_Array.hpp>
-#include <Teuchos_FileInputSource.hpp>
 #include <Teuchos_StrUtils.hpp>
+#include <Teuchos_StringInputSource.hpp>
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
+#include <Teuchos_XMLParameterListReader.hpp>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -14,6 +15,8 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+
+#include "SceneText.hpp"
 
 namespace perinox {
 
@@ -444,6 +447,19 @@ int componentIndex(const std::string& c) {
   if (c == "z") return 2;
   if (c == "all") return -1;
   return -2;
+}
+
+/// The reason in a Teuchos exception's text, which spans lines (source location, the failed
+/// test, then the reason): the line that says "error", else the last non-empty line.
+std::string teuchosReason(const std::string& msg) {
+  std::string first, last, line;
+  std::stringstream ss(msg);
+  while (std::getline(ss, line)) {
+    if (line.find_first_not_of(" \t") == std::string::npos || line.rfind("Throw number", 0) == 0) continue;
+    last = line;
+    if (first.empty() && line.find("rror") != std::string::npos) first = line;
+  }
+  return first.empty() ? last : first;
 }
 
 double hydrostaticStretch(double lambda, double mu, double traction, const std::string& file) {
@@ -1008,33 +1024,17 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
 }
 
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir) {
-  {
-    std::ifstream in(path);
-    if (!in) throw SceneError(path + ": cannot open the scene file");
-  }
+  const std::string text = readSceneText(path);
   ParameterList pl;
   try {
-    Teuchos::FileInputSource src(path);
+    Teuchos::StringInputSource src(text);
     const Teuchos::XMLObject root = src.getObject();
-    if (root.getTag() != "ParameterList") throw SceneError(path + ": the root element must be <ParameterList>");
     strictXml(root, "", path);
-    pl = *Teuchos::getParametersFromXmlFile(path);
+    pl = Teuchos::XMLParameterListReader().toParameterList(root);
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    std::string msg = e.what();
-    // Teuchos messages span lines (source location, throw test, then the reason); keep the
-    // reason: the line that says "error", else the last non-empty line.
-    std::string first, last;
-    std::stringstream ss(msg);
-    std::string line;
-    while (std::getline(ss, line)) {
-      if (line.find_first_not_of(" \t") == std::string::npos) continue;
-      last = line;
-      if (first.empty() && line.find("error") != std::string::npos) first = line;
-    }
-    if (first.empty()) first = last;
-    throw SceneError(path + ": malformed scene XML: " + (first.empty() ? msg : first));
+    throw SceneError(path + ": malformed scene XML: " + teuchosReason(e.what()));
   }
   const auto schema = sceneSchema();
   for (const auto& o : overrides) applyOverride(pl, o, *schema);
