@@ -1,15 +1,17 @@
 // Scene parsing and validation. Every check here exists so that a user's mistake gives one
-// sentence naming the file and key, before any particle is built.
+// sentence naming the file (or --set argument) and key, before any particle is built.
 #include "perinox/io/Scene.hpp"
 
 #include <Teuchos_Array.hpp>
-#include <Teuchos_StrUtils.hpp>
 #include <Teuchos_StringInputSource.hpp>
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Teuchos_XMLParameterListReader.hpp>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -28,6 +30,32 @@ using Teuchos::ParameterList;
 template <class T>
 Array<T> arr(std::initializer_list<T> v) {
   return Array<T>(std::vector<T>(v));
+}
+
+constexpr std::size_t kMaxMessage = 300;  // characters of a message after the file name
+
+std::string joinKey(const std::string& path, const std::string& name) {
+  return path.empty() ? name : path + "/" + name;
+}
+
+std::string orList(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i == 0 ? "" : i + 1 == v.size() ? " or " : ", ") + v[i];
+  return s;
+}
+
+std::string number(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+/// One line, at most kMaxMessage characters: a message never grows with the user's input.
+[[noreturn]] void fail(const std::string& file, std::string msg) {
+  std::replace_if(msg.begin(), msg.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
+  if (msg.size() > kMaxMessage) msg = msg.substr(0, kMaxMessage - 3) + "...";
+  throw SceneError(file + ": " + msg);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -224,6 +252,24 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
   return prev[b.size()];
 }
 
+/// " (did you mean 'X'?)" for the candidate nearest to `name` (ignoring case), if near enough.
+std::string suggestion(const std::string& name, const std::vector<std::string>& candidates) {
+  if (name.size() > 64) return "";
+  std::string best;
+  std::size_t bestD = 4;
+  for (const auto& c : candidates) {
+    const std::size_t dist = editDistance(name, c);
+    if (dist < bestD) bestD = dist, best = c;
+  }
+  return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+std::vector<std::string> keysOf(const ParameterList& l) {
+  std::vector<std::string> k;
+  for (auto v = l.begin(); v != l.end(); ++v) k.push_back(l.name(v));
+  return k;
+}
+
 std::string typeName(const Teuchos::ParameterEntry& e) {
   if (e.isList()) return "sublist";
   return e.getAny().typeName();
@@ -240,31 +286,22 @@ std::string friendlyType(const std::string& t) {
   return t;
 }
 
-[[noreturn]] void fail(const std::string& file, const std::string& msg) {
-  throw SceneError(file + ": " + msg);
-}
-
 void checkAgainst(const ParameterList& user, const ParameterList& valid, const std::string& path,
                   const std::string& file) {
   for (auto it = user.begin(); it != user.end(); ++it) {
     const std::string& name = user.name(it);
     const auto& entry = user.entry(it);
-    const std::string key = path.empty() ? name : path + "/" + name;
+    const std::string key = joinKey(path, name);
     if (!valid.isParameter(name)) {
-      std::string best;
-      std::size_t bestD = 1000;
-      for (auto v = valid.begin(); v != valid.end(); ++v) {
-        const std::size_t dist = editDistance(name, valid.name(v));
-        if (dist < bestD) bestD = dist, best = valid.name(v);
-      }
-      std::string hint = bestD <= 3 ? " (did you mean '" + best + "'?)" : "";
-      std::string allowed;
-      for (auto v = valid.begin(); v != valid.end(); ++v) allowed += (allowed.empty() ? "" : ", ") + valid.name(v);
-      fail(file, "unknown key '" + key + "'" + hint + "; allowed here: " + allowed);
+      const std::vector<std::string> allowed = keysOf(valid);
+      const std::string hint = suggestion(name, allowed);
+      std::string list = orList(allowed);
+      if (list.size() > 160) list = "see 'perinox schema'";
+      fail(file, "unknown key " + quote(key, 80) + hint + (hint.empty() ? "; allowed here: " + list : ""));
     }
     const auto& ventry = valid.getEntry(name);
     if (entry.isList() != ventry.isList())
-      fail(file, "'" + key + "' must be " + (ventry.isList() ? "a sublist" : "a parameter") + ", not " +
+      fail(file, quote(key, 80) + " must be " + (ventry.isList() ? "a sublist" : "a parameter") + ", not " +
                      (entry.isList() ? "a sublist" : "a parameter"));
     if (entry.isList()) {
       const auto& sub = user.sublist(name);
@@ -280,7 +317,7 @@ void checkAgainst(const ParameterList& user, const ParameterList& valid, const s
         for (auto c = sub.begin(); c != sub.end(); ++c) {
           const std::string ckey = key + "/" + sub.name(c);
           if (!sub.entry(c).isList())
-            fail(file, "'" + ckey + "' must be a sublist describing one " + named->second);
+            fail(file, quote(ckey, 80) + " must be a sublist describing one " + named->second);
           checkAgainst(sub.sublist(sub.name(c)), templateFor(name), ckey, file);
         }
         continue;
@@ -291,6 +328,40 @@ void checkAgainst(const ParameterList& user, const ParameterList& valid, const s
     const std::string ut = friendlyType(typeName(entry)), vt = friendlyType(typeName(ventry));
     if (ut != vt) fail(file, "'" + key + "' must be of type " + vt + ", not " + ut);
   }
+}
+
+/// Calls f(key, pattern, entry) for every parameter of l and its sublists, where pattern is the
+/// key with the names of named sublists' entries replaced by '*'.
+template <class F>
+void forEachParameter(const ParameterList& l, const std::string& key, const std::string& pattern, const F& f) {
+  for (auto it = l.begin(); it != l.end(); ++it) {
+    const std::string& name = l.name(it);
+    const std::string k = joinKey(key, name), p = joinKey(pattern, name);
+    if (!l.entry(it).isList()) {
+      f(k, p, l.entry(it));
+      continue;
+    }
+    const ParameterList& sub = l.sublist(name);
+    if (!namedSublists().count(name)) {
+      forEachParameter(sub, k, p, f);
+      continue;
+    }
+    for (auto c = sub.begin(); c != sub.end(); ++c)
+      if (sub.entry(c).isList()) forEachParameter(sub.sublist(sub.name(c)), k + "/" + sub.name(c), p + "/*", f);
+  }
+}
+
+/// No number of the scene is infinite or NaN (none of its keys gives a meaning to them).
+void checkFinite(const ParameterList& pl, const std::string& file) {
+  forEachParameter(pl, "", "", [&](const std::string& key, const std::string&, const Teuchos::ParameterEntry& e) {
+    if (e.isType<double>() && !std::isfinite(Teuchos::getValue<double>(e)))
+      fail(file, "'" + key + "' must be a finite number, not " + number(Teuchos::getValue<double>(e)));
+    if (!e.isType<Array<double>>()) return;
+    const auto& a = Teuchos::getValue<Array<double>>(e);
+    for (int i = 0; i < a.size(); ++i)
+      if (!std::isfinite(a[i]))
+        fail(file, "'" + key + "' entry " + std::to_string(i + 1) + " must be a finite number, not " + number(a[i]));
+  });
 }
 
 /// Fills defaults (recursively, including named sublists' children).
@@ -313,57 +384,101 @@ void fillDefaults(ParameterList& user, const ParameterList& valid) {
   }
 }
 
-/// Strict checks on the raw XML text that Teuchos' parser lets through: trailing garbage in
-/// numbers ("1.0e-8x"), non-integers for int ("3.5"), duplicate keys.
-bool strictNumber(const std::string& s, bool integer) {
-  std::string t = Teuchos::StrUtils::before(s + " ", " ");
-  const char* b = s.c_str();
-  while (std::isspace(static_cast<unsigned char>(*b))) ++b;
-  if (!*b) return false;
-  char* end = nullptr;
-  if (integer) {
-    std::strtoll(b, &end, 10);
-  } else {
-    std::strtod(b, &end);
-  }
-  while (end && std::isspace(static_cast<unsigned char>(*end))) ++end;
-  return end && *end == '\0';
+// ---------------------------------------------------------------------------------------------
+// Values as text (the XML's value="..." and --set's value), checked the same way in both
+// ---------------------------------------------------------------------------------------------
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
 }
 
+/// Why `text` is not a number (an int if `integer`), or "" when it is. The whole text must be
+/// one decimal number: no trailing characters, no hexadecimal, no nan or inf, no overflow;
+/// an int must fit in 32 bits (never wrapped or truncated).
+std::string numberProblem(const std::string& text, bool integer) {
+  const std::string t = trim(text);
+  char* end = nullptr;
+  errno = 0;
+  if (integer) {
+    const long long v = t.empty() ? 0 : std::strtoll(t.c_str(), &end, 10);
+    if (t.empty() || *end || t.find_first_not_of("+-0123456789") != std::string::npos) return "an integer";
+    if (errno == ERANGE || v < INT_MIN || v > INT_MAX)
+      return "an integer from " + std::to_string(INT_MIN) + " to " + std::to_string(INT_MAX);
+    return "";
+  }
+  const double v = t.empty() ? 0 : std::strtod(t.c_str(), &end);
+  if (!t.empty() && !*end && !std::isfinite(v)) return "a finite number";
+  if (t.empty() || *end || t.find_first_not_of("+-.0123456789eE") != std::string::npos) return "a number";
+  return "";
+}
+
+bool parseBool(const std::string& text, bool& out) {
+  std::string v = trim(text);
+  std::transform(v.begin(), v.end(), v.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (v == "true" || v == "1") return out = true, true;
+  if (v == "false" || v == "0") return out = false, true;
+  return false;
+}
+
+/// The entries of an array written "{a, b, c}" (trimmed); false if it is not of that form.
+bool splitArray(const std::string& text, std::vector<std::string>& out) {
+  const std::string t = trim(text);
+  out.clear();
+  if (t.size() < 2 || t.front() != '{' || t.back() != '}') return false;
+  const std::string inner = t.substr(1, t.size() - 2);
+  if (trim(inner).empty()) return true;
+  std::stringstream ss(inner + ",");
+  std::string entry;
+  while (std::getline(ss, entry, ',')) out.push_back(trim(entry));
+  return std::none_of(out.begin(), out.end(), [](const std::string& e) { return e.empty() || e.find_first_of("{}") != std::string::npos; });
+}
+
+/// Why `text` is not a value of the scene type `type` (phrased to follow "is not"), or "".
+std::string valueProblem(const std::string& type, const std::string& text) {
+  if (type == "double" || type == "int") return numberProblem(text, type == "int");
+  bool b;
+  if (type == "bool") return parseBool(text, b) ? "" : "true or false";
+  if (type == "string") return "";
+  const bool ints = type == "Array(int)";
+  std::vector<std::string> entries;
+  if (!splitArray(text, entries)) return std::string("an array like ") + (type == "Array(string)" ? "{xmin, xmax}" : ints ? "{20, 10}" : "{0.5, 1}");
+  if (type == "Array(string)") return "";
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const std::string p = numberProblem(entries[i], ints);
+    if (!p.empty()) return std::string("an array of ") + (ints ? "integers" : "numbers") + ": entry " + std::to_string(i + 1) + ", " + quote(entries[i]) + ", is not " + p;
+  }
+  return "";
+}
+
+const std::set<std::string>& sceneTypes() {
+  static const std::set<std::string> t{"int", "double", "bool", "string", "Array(int)", "Array(double)", "Array(string)"};
+  return t;
+}
+
+/// Strict checks on the parsed XML that Teuchos' own conversion lets through or reports badly:
+/// every value must be exactly of its type (see valueProblem), keys must be unique and named.
 void strictXml(const Teuchos::XMLObject& obj, const std::string& path, const std::string& file) {
   std::set<std::string> seen;
   for (int i = 0; i < obj.numChildren(); ++i) {
     const Teuchos::XMLObject& c = obj.getChild(i);
-    if (!c.hasAttribute("name")) continue;
+    const std::string where = path.empty() ? "at the top level" : "in '" + path + "'";
+    if (!c.hasAttribute("name")) fail(file, "a <" + c.getTag() + "> " + where + " has no name=\"...\"");
     const std::string name = c.getAttribute("name");
-    const std::string key = path.empty() ? name : path + "/" + name;
+    const std::string key = joinKey(path, name);
     if (!seen.insert(name).second) fail(file, "key '" + key + "' is given twice");
     if (c.getTag() == "ParameterList") {
       strictXml(c, key, file);
       continue;
     }
-    if (c.getTag() != "Parameter" || !c.hasAttribute("type") || !c.hasAttribute("value")) continue;
+    if (!c.hasAttribute("type") || !c.hasAttribute("value"))
+      fail(file, "the <Parameter> '" + key + "' needs both type=\"...\" and value=\"...\"");
     const std::string type = c.getAttribute("type"), value = c.getAttribute("value");
-    auto bad = [&](const std::string& what) {
-      fail(file, "'" + key + "' = \"" + value + "\" is not " + what);
-    };
-    if (type == "double" && !strictNumber(value, false)) bad("a number");
-    if (type == "int" && !strictNumber(value, true)) bad("an integer");
-    if (type == "bool") {
-      std::string v = value;
-      std::transform(v.begin(), v.end(), v.begin(), ::tolower);
-      if (v != "true" && v != "false" && v != "1" && v != "0") bad("true or false");
-    }
-    if (type == "Array(double)" || type == "Array(int)") {
-      std::string v = value;
-      const auto l = v.find('{'), r = v.rfind('}');
-      if (l == std::string::npos || r == std::string::npos || r < l) bad("an array like {1, 2}");
-      std::string inner = v.substr(l + 1, r - l - 1);
-      std::stringstream ss(inner);
-      std::string tok;
-      while (std::getline(ss, tok, ','))
-        if (!strictNumber(tok, type == "Array(int)")) bad(type == "Array(int)" ? "an array of integers" : "an array of numbers");
-    }
+    if (!sceneTypes().count(type))
+      fail(file, "'" + key + "' has type " + quote(type) + "; a scene's types are int, double, bool, string, Array(int), Array(double) and Array(string)");
+    const std::string problem = valueProblem(type, value);
+    if (!problem.empty()) fail(file, "'" + key + "' = " + quote(value) + " is not " + problem);
   }
 }
 
@@ -372,14 +487,18 @@ void strictXml(const Teuchos::XMLObject& obj, const std::string& path, const std
 // ---------------------------------------------------------------------------------------------
 
 void applyOverride(ParameterList& pl, const std::string& spec, const ParameterList& schema) {
+  const std::string arg = "--set " + quote(spec, 80);
+  int line = 0;
+  const std::string text = textProblem(spec, line);
+  if (!text.empty()) throw SceneError(arg + ": contains " + text);
   const auto eq = spec.find('=');
-  if (eq == std::string::npos) throw SceneError("--set " + spec + ": expected Sublist/Key=value");
+  if (eq == std::string::npos) throw SceneError(arg + ": expected Sublist/Key=value");
   const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
   std::vector<std::string> parts;
   std::stringstream ss(path);
   std::string part;
   while (std::getline(ss, part, '/')) parts.push_back(part);
-  if (parts.empty()) throw SceneError("--set " + spec + ": empty key");
+  if (parts.empty()) throw SceneError(arg + ": empty key");
   ParameterList* cur = &pl;
   const ParameterList* val = &schema;
   for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
@@ -396,7 +515,7 @@ void applyOverride(ParameterList& pl, const std::string& spec, const ParameterLi
       } else if (val->isSublist(parts[i])) {
         val = &val->sublist(parts[i]);
       } else {
-        throw SceneError("--set " + spec + ": unknown sublist '" + parts[i] + "'");
+        throw SceneError(arg + ": unknown sublist " + quote(parts[i]) + suggestion(parts[i], keysOf(*val)));
       }
     }
     cur = &cur->sublist(parts[i]);
@@ -404,30 +523,34 @@ void applyOverride(ParameterList& pl, const std::string& spec, const ParameterLi
   const std::string& key = parts.back();
   const Teuchos::ParameterEntry* proto = cur->isParameter(key) ? cur->getEntryPtr(key)
                                          : (val && val->isParameter(key) ? val->getEntryPtr(key) : nullptr);
-  if (!proto) throw SceneError("--set " + spec + ": unknown key '" + path + "'");
+  if (!proto) throw SceneError(arg + ": unknown key " + quote(path, 80) + (val ? suggestion(key, keysOf(*val)) : ""));
+  if (proto->isList()) throw SceneError(arg + ": " + quote(path, 80) + " is a sublist; set one of its keys (Sublist/Key=value)");
   const std::string t = friendlyType(typeName(*proto));
-  auto badValue = [&](const std::string& what) {
-    throw SceneError("--set " + spec + ": '" + value + "' is not " + what);
-  };
+  if (!sceneTypes().count(t)) throw SceneError(arg + ": cannot set a value of type " + t);
+  const std::string problem = valueProblem(t, value);
+  if (!problem.empty()) throw SceneError(arg + ": " + quote(value) + " is not " + problem);
+  std::vector<std::string> entries;
+  splitArray(value, entries);
+  bool b = false;
   if (t == "double") {
-    if (!strictNumber(value, false)) badValue("a number");
-    cur->set(key, std::strtod(value.c_str(), nullptr));
+    cur->set(key, std::strtod(trim(value).c_str(), nullptr));
   } else if (t == "int") {
-    if (!strictNumber(value, true)) badValue("an integer");
-    cur->set(key, static_cast<int>(std::strtol(value.c_str(), nullptr, 10)));
+    cur->set(key, static_cast<int>(std::strtol(trim(value).c_str(), nullptr, 10)));
   } else if (t == "bool") {
-    if (value != "true" && value != "false") badValue("true or false");
-    cur->set(key, value == "true");
+    parseBool(value, b);
+    cur->set(key, b);
   } else if (t == "string") {
     cur->set(key, value);
   } else if (t == "Array(double)") {
-    cur->set(key, Teuchos::fromStringToArray<double>(value));
+    Array<double> a;
+    for (const auto& e : entries) a.push_back(std::strtod(e.c_str(), nullptr));
+    cur->set(key, a);
   } else if (t == "Array(int)") {
-    cur->set(key, Teuchos::fromStringToArray<int>(value));
-  } else if (t == "Array(string)") {
-    cur->set(key, Teuchos::fromStringToArray<std::string>(value));
+    Array<int> a;
+    for (const auto& e : entries) a.push_back(static_cast<int>(std::strtol(e.c_str(), nullptr, 10)));
+    cur->set(key, a);
   } else {
-    throw SceneError("--set " + spec + ": cannot set a value of type " + t);
+    cur->set(key, Array<std::string>(entries));
   }
 }
 
@@ -489,6 +612,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   const auto schema = sceneSchema();
   checkAgainst(pl, *schema, "", file);
   fillDefaults(pl, *schema);
+  checkFinite(pl, file);
 
   Scene sc;
   sc.file = file;
@@ -1034,11 +1158,22 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    throw SceneError(path + ": malformed scene XML: " + teuchosReason(e.what()));
+    fail(path, "malformed scene XML: " + teuchosReason(e.what()));
   }
   const auto schema = sceneSchema();
   for (const auto& o : overrides) applyOverride(pl, o, *schema);
-  return buildScene(pl, path, presetDir);
+  try {
+    return buildScene(pl, path, presetDir);
+  } catch (const SceneError& e) {
+    // A key that a --set gave: name that argument too (the latest one wins, as in applyOverride).
+    const std::string msg = e.what();
+    for (auto o = overrides.rbegin(); o != overrides.rend(); ++o)
+      if (msg.find("'" + o->substr(0, o->find('=')) + "'") != std::string::npos)
+        throw SceneError(msg + " (from --set " + quote(*o, 60) + ")");
+    throw;
+  } catch (const std::exception& e) {
+    fail(path, teuchosReason(e.what()));
+  }
 }
 
 }  // namespace perinox
