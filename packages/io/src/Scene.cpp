@@ -32,7 +32,15 @@ Array<T> arr(std::initializer_list<T> v) {
   return Array<T>(std::vector<T>(v));
 }
 
-constexpr std::size_t kMaxMessage = 300;  // characters of a message after the file name
+// Upper bounds on the work a scene may ask for (each stated in its key's documentation).
+constexpr int kMaxLoadSteps = 1000000;
+constexpr int kMaxTotalSteps = 20 * kMaxLoadSteps;  // the default, 20 x Load Steps, always fits
+constexpr int kMaxArcSteps = 1000000;
+constexpr int kMaxNewtonIterations = 1000;
+constexpr int kMaxCutbacks = 60;                    // 2^-60 of an increment is below round-off
+constexpr long long kMaxParticles = 50000000;       // lattice sites, fictitious layers included
+constexpr double kMaxHorizonFactor = 50.0;          // horizon / spacing
+constexpr std::size_t kMaxMessage = 300;            // characters of a message after the file name
 
 std::string joinKey(const std::string& path, const std::string& name) {
   return path.empty() ? name : path + "/" + name;
@@ -72,49 +80,118 @@ const std::map<std::string, std::string>& namedSublists() {
   return m;
 }
 
+// Keys are known to the checks by pattern: the key with the user's name of a named sublist's
+// entry replaced by '*' ("Regions/*/Side"). The schema's setters below record, for the keys
+// that need it, the allowed values and the array length, from the same lists that write the
+// keys' documentation.
+std::map<std::string, std::vector<std::string>>& choiceTable() {
+  static std::map<std::string, std::vector<std::string>> t;
+  return t;
+}
+
+enum class Length { Dim, DimOrEmpty, DimSquaredOrEmpty, Three };
+std::map<std::string, Length>& lengthTable() {
+  static std::map<std::string, Length> t;
+  return t;
+}
+
+struct Choice {
+  std::string value, meaning;
+};
+
+/// An enumerated string key: matched exactly; its documentation lists the values.
+void setChoice(ParameterList& l, const std::string& pattern, const std::string& key, const std::string& def,
+               const std::vector<Choice>& choices, const std::string& lead = "", const std::string& tail = "") {
+  std::vector<std::string> values, described;
+  for (const auto& c : choices) {
+    values.push_back(c.value);
+    described.push_back(c.meaning.empty() ? c.value : c.value + " (" + c.meaning + ")");
+  }
+  choiceTable()[joinKey(pattern, key)] = values;
+  l.set(key, def, lead + orList(described) + tail);
+}
+
+std::vector<Choice> sideChoices() {
+  std::vector<Choice> c;
+  for (int s = 0; s < 6; ++s) c.push_back({sideName(static_cast<Side>(s)), ""});
+  return c;
+}
+
+std::string lengthRule(Length r) {
+  switch (r) {
+    case Length::Dim: return "Dimension entries";
+    case Length::DimOrEmpty: return "none, or Dimension entries";
+    case Length::DimSquaredOrEmpty: return "none, or Dimension x Dimension entries";
+    default: return "3 entries";
+  }
+}
+
+/// An array key whose length the scene's dimension fixes (stated in its documentation).
+template <class T>
+void setVector(ParameterList& l, const std::string& pattern, const std::string& key, const Array<T>& def,
+               const std::string& doc, Length rule) {
+  lengthTable()[joinKey(pattern, key)] = rule;
+  l.set(key, def, doc + " (" + lengthRule(rule) + ")");
+}
+
 ParameterList holeTemplate() {
+  const std::string p = "Discretization/Holes/*";
   ParameterList h("hole");
-  h.set("Shape", "Circle", "Circle (disc; cylinder along z in 3D) or Rectangle");
-  h.set("Center", arr<double>({0, 0, 0}), "centre of the hole");
-  h.set("Radius", 0.0, "radius of a Circle");
-  h.set("Half Widths", arr<double>({0, 0, 0}), "half extents of a Rectangle per axis");
+  setChoice(h, p, "Shape", "Circle", {{"Circle", "disc; cylinder along z in 3D"}, {"Rectangle", ""}});
+  setVector(h, p, "Center", arr<double>({0, 0, 0}), "centre of the hole", Length::Dim);
+  h.set("Radius", 0.0, "radius of a Circle (> 0)");
+  setVector(h, p, "Half Widths", arr<double>({0, 0, 0}), "half extents of a Rectangle per axis (each > 0)", Length::Dim);
   return h;
 }
 
 ParameterList regionTemplate() {
+  const std::string p = "Regions/*";
   ParameterList r("region");
-  r.set("Type", "Box", "Box, Side Layer, Fictitious Side, Nearest, All Fictitious or All Real");
-  r.set("Lower", arr<double>({0, 0, 0}), "Box: lower corner");
-  r.set("Upper", arr<double>({0, 0, 0}), "Box: upper corner");
-  r.set("Population", "Real", "Box/Nearest: Real, Fictitious or All particles");
-  r.set("Side", "xmin", "Side Layer / Fictitious Side: xmin, xmax, ymin, ymax, zmin, zmax");
-  r.set("Thickness", 0.0, "Side Layer: layer thickness (0 = one particle spacing)");
-  r.set("Point", arr<double>({0, 0, 0}), "Nearest: the point");
+  setChoice(r, p, "Type", "Box",
+            {{"Box", ""}, {"Side Layer", ""}, {"Fictitious Side", ""}, {"Nearest", ""},
+             {"All Fictitious", "needs 'Discretization/Fictitious Sides'"}, {"All Real", ""}});
+  setVector(r, p, "Lower", arr<double>({0, 0, 0}), "Box: lower corner", Length::Dim);
+  setVector(r, p, "Upper", arr<double>({0, 0, 0}), "Box: upper corner", Length::Dim);
+  setChoice(r, p, "Population", "Real", {{"Real", ""}, {"Fictitious", ""}, {"All", "every particle"}}, "Box/Nearest: ");
+  setChoice(r, p, "Side", "xmin", sideChoices(), "Side Layer / Fictitious Side: ", " (a side of the body's dimension)");
+  r.set("Thickness", 0.0, "Side Layer: layer thickness (>= 0; 0 = one particle spacing)");
+  setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point", Length::Dim);
   return r;
 }
 
+/// The start of a template for an entry that acts on a region.
+ParameterList onRegion(const std::string& what, const std::string& regionDoc) {
+  ParameterList l(what);
+  l.set("Region", "", regionDoc);
+  return l;
+}
+
 ParameterList conditionTemplate() {
-  ParameterList c("condition");
-  c.set("Region", "", "name of the region whose particles are constrained");
-  c.set("Component", "all", "x, y, z or all");
+  const std::string p = "Boundary Conditions/*";
+  ParameterList c = onRegion("condition", "name of the region whose particles are constrained");
+  setChoice(c, p, "Component", "all", {{"x", ""}, {"y", ""}, {"z", ""}, {"all", ""}});
   c.set("Value", 0.0, "prescribed displacement at load factor 1");
-  c.set("Gradient", arr<double>({}), "optional: u = Value + Gradient . X (per axis)");
+  setVector(c, p, "Gradient", arr<double>({}), "optional: u = Value + Gradient . X", Length::DimOrEmpty);
   return c;
 }
 
 ParameterList loadTemplate() {
-  ParameterList l("load");
-  l.set("Region", "", "name of the region carrying the load");
-  l.set("Type", "Total Force", "Total Force (spread over the region by volume), Traction (force per area on a Side Layer), or Body Force (force per volume)");
-  l.set("Value", arr<double>({0, 0, 0}), "the load vector at load factor 1");
+  const std::string p = "Loads/*";
+  ParameterList l = onRegion("load", "name of the region carrying the load");
+  setChoice(l, p, "Type", "Total Force",
+            {{"Total Force", "spread over the region by volume"}, {"Traction", "force per area on a Side Layer"},
+             {"Body Force", "force per volume"}});
+  setVector(l, p, "Value", arr<double>({0, 0, 0}), "the load vector at load factor 1", Length::Dim);
   return l;
 }
 
 ParameterList probeTemplate() {
-  ParameterList p("probe");
-  p.set("Region", "", "region to probe");
-  p.set("Quantity", "Displacement", "Displacement (mean over the region, per step), Reaction (sum of reaction forces, per step) or Profile (every particle of the region at the end, to profile_<name>.csv)");
-  return p;
+  const std::string p = "Probes/*";
+  ParameterList r = onRegion("probe", "region to probe");
+  setChoice(r, p, "Quantity", "Displacement",
+            {{"Displacement", "mean over the region, per step"}, {"Reaction", "sum of reaction forces, per step"},
+             {"Profile", "every particle of the region at the end, to profile_<name>.csv"}});
+  return r;
 }
 
 const ParameterList& templateFor(const std::string& sub) {
@@ -127,52 +204,69 @@ const ParameterList& templateFor(const std::string& sub) {
 }
 
 Teuchos::RCP<ParameterList> buildSchema() {
+  templateFor("Regions");  // the templates record their keys' choices and lengths first
+  const std::string lim = std::to_string(kMaxParticles);
   auto s = Teuchos::rcp(new ParameterList("perinox"));
   s->set("Title", "", "one line naming the scene");
   s->set("Description", "", "free text");
   s->set("Expected Outcome", "", "for test scenes: 'converged', or 'failure: TEXT' where TEXT must appear in the failure reason");
   auto& d = s->sublist("Discretization", false, "particles and families");
-  d.set("Type", "Lattice", "Lattice or Particle File");
-  d.set("Dimension", 2, "1, 2 or 3");
-  d.set("Lower Corner", arr<double>({0, 0, 0}), "Lattice: lower corner of the body");
-  d.set("Upper Corner", arr<double>({1, 1, 1}), "Lattice: upper corner of the body");
-  d.set("Particles", arr<int>({}), "Lattice: particles per axis (or give Spacing)");
-  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles; Particle File: nominal spacing");
-  d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (must be >= 1)");
-  d.set("Horizon", 0.0, "absolute horizon (overrides Horizon Factor when > 0)");
+  const std::string dp = "Discretization";
+  setChoice(d, dp, "Type", "Lattice", {{"Lattice", ""}, {"Particle File", ""}});
+  d.set("Dimension", 2, "1, 2 or 3; every vector key (corners, points, centres, load values) then takes exactly this many entries (an absent key's 3-entry default counts only its first Dimension entries)");
+  setVector(d, dp, "Lower Corner", arr<double>({0, 0, 0}), "Lattice: lower corner of the body", Length::Dim);
+  setVector(d, dp, "Upper Corner", arr<double>({1, 1, 1}), "Lattice: upper corner of the body", Length::Dim);
+  setVector(d, dp, "Particles", arr<int>({}),
+            "Lattice: particles per axis, each >= 1, at most " + lim + " lattice sites in all with the fictitious layers; or give Spacing",
+            Length::DimOrEmpty);
+  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing");
+  d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (1 <= factor <= " + number(kMaxHorizonFactor) + ")");
+  d.set("Horizon", 0.0, "Particle File: absolute horizon (overrides Horizon Factor when > 0; spacing <= horizon <= " + number(kMaxHorizonFactor) + " x spacing)");
   d.set("Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A");
-  d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta");
+  std::vector<std::string> sides;
+  for (const auto& c : sideChoices()) sides.push_back(c.value);
+  choiceTable()["Discretization/Fictitious Sides"] = sides;
+  d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides));
   d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
-  d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing");
-  d.set("Jitter Seed", 12345, "seed of the jitter");
+  d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing, in [0, 1)");
+  d.set("Jitter Seed", 12345, "seed of the jitter (>= 0)");
   d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
   auto& m = s->sublist("Material", false, "elastic material");
-  m.set("Model", "Hencky", "Hencky (finite deformation) or Small Strain");
-  m.set("Plane", "Plane Strain", "2D: Plane Strain or Plane Stress");
+  const std::string mp = "Material";
+  setChoice(m, mp, "Model", "Hencky", {{"Hencky", "finite deformation"}, {"Small Strain", ""}});
+  setChoice(m, mp, "Plane", "Plane Strain", {{"Plane Strain", ""}, {"Plane Stress", ""}}, "2D: ");
   m.set("Young's Modulus", 0.0, "E > 0, in the scene's stress units");
   m.set("Poisson's Ratio", 0.0, "-1 < nu < 0.5");
-  m.set("Modulus Field", "Uniform", "Uniform, or Seed001 Bar: E(x) of seed 001 eq. 18 (E on the left half, softer to the right)");
+  setChoice(m, mp, "Modulus Field", "Uniform",
+            {{"Uniform", ""}, {"Seed001 Bar", "E(x) of seed 001 eq. 18: E on the left half, softer to the right"}});
   m.set("Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20");
   m.set("Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)");
   m.set("Field Length", 1.0, "Seed001 Bar: L_tot (x measured from 0)");
   auto& mo = s->sublist("Model", false, "effects");
-  mo.set("Stabilization", "None", "None or Silling");
+  const std::string mop = "Model";
+  setChoice(mo, mop, "Stabilization", "None", {{"None", ""}, {"Silling", ""}});
   mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
-  mo.set("Zero-Energy Control", "None", "None, Springs (C1), Average Displacement (C2) or Stress Points (seed 001; nearest-neighbour families)");
-  mo.set("Stress Point Seed", 2018, "seed of the stress-point arrangements (drawn per particle from its global id)");
+  setChoice(mo, mop, "Zero-Energy Control", "None",
+            {{"None", ""}, {"Springs", "C1"}, {"Average Displacement", "C2"}, {"Stress Points", "seed 001; nearest-neighbour families"}});
+  mo.set("Stress Point Seed", 2018, "seed of the stress-point arrangements (>= 0; drawn per particle from its global id)");
   mo.set("Control Constant", -1.0, "C1 or C2; negative: seed 001 Table 1 value for the particle count (n = 100, 200, 500, 1000)");
   auto& dm = s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps");
+  const std::string dmp = "Damage";
   dm.set("Enabled", false, "turn the damage effect on");
   dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
   dm.set("Softening Start", 0.0015, "s_min: bond forces soften from here (0 < s_min < s_cr)");
   dm.set("Beta", 3.0, "steepness of the tanh softening (> 0)");
-  dm.set("Softening", "Paper", "Paper (seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr) or Continuous (the tanh rescaled to be exactly 1 at s_min and 0 at s_cr)");
+  setChoice(dm, dmp, "Softening", "Paper",
+            {{"Paper", "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
+             {"Continuous", "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}});
   dm.set("Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step");
-  dm.set("On Stall", "Stop",
-         "what a load step that fails after all its cut-backs does: Stop (the paper's Fig. 8; the run stops with a diagnosis) or "
-         "Break Most Stretched (break, at the last converged state, the intact bonds whose stretch is within 'Stall Break Tolerance' "
-         "of the largest, if that one is in the softening band, re-equilibrate at the same load and go on: the remedy for a "
-         "snap-back of softening bonds under displacement control; reported per step as stall_broken_bonds)");
+  setChoice(dm, dmp, "On Stall", "Stop",
+            {{"Stop", "the paper's Fig. 8; the run stops with a diagnosis"},
+             {"Break Most Stretched",
+              "break, at the last converged state, the intact bonds whose stretch is within 'Stall Break Tolerance' "
+              "of the largest, if that one is in the softening band, re-equilibrate at the same load and go on: the remedy for a "
+              "snap-back of softening bonds under displacement control; reported per step as stall_broken_bonds"}},
+            "what a load step that fails after all its cut-backs does: ");
   dm.set("Stall Break Tolerance", 1e-6, "On Stall = Break Most Stretched: bonds within this fraction of (s_cr - s_min) of the largest stretch break together (mirror-image bonds differ by round-off only)");
   dm.set("Max Stall Breaks", 200, "On Stall = Break Most Stretched: stall breaks allowed in a run");
   dm.set("Reload Tolerance", 0.01,
@@ -184,54 +278,75 @@ Teuchos::RCP<ParameterList> buildSchema() {
   auto& rot = s->sublist("Superposed Rotation", false,
                          "a rigid rotation superposed on the loading: at load factor lambda the body turns by lambda * Angle; "
                          "prescribed particles follow the arc, dead loads turn with the body (objectivity tests)");
+  const std::string rp = "Superposed Rotation";
   rot.set("Angle", 0.0, "degrees at load factor 1 (0: no rotation)");
-  rot.set("Center", arr<double>({0, 0, 0}), "a point on the axis");
-  rot.set("Axis", arr<double>({0, 0, 1}), "3D: the axis (normalised); 2D: must be z");
+  setVector(rot, rp, "Center", arr<double>({0, 0, 0}), "a point on the axis", Length::Dim);
+  setVector(rot, rp, "Axis", arr<double>({0, 0, 1}), "3D: the axis (normalised); 2D: must be z", Length::Three);
   s->sublist("Probes", false, "named probes written per load step");
   auto& r = s->sublist("Reference", false, "analytic reference for errors");
-  r.set("Type", "None", "None, Hydrostatic Hencky, Uniform Stretch, Affine or Seed001 Bar (eq. 19 with the Material's field parameters)");
-  r.set("Gradient", arr<double>({}), "Affine: displacement gradient H, row-major dim x dim (u = H (X - Center))");
+  const std::string refp = "Reference";
+  setChoice(r, refp, "Type", "None",
+            {{"None", ""}, {"Hydrostatic Hencky", ""}, {"Uniform Stretch", ""}, {"Affine", ""},
+             {"Seed001 Bar", "eq. 19 with the Material's field parameters"}});
+  setVector(r, refp, "Gradient", arr<double>({}), "Affine: displacement gradient H, row-major (u = H (X - Center))", Length::DimSquaredOrEmpty);
   r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
-  r.set("Stretch", 1.0, "Uniform Stretch: l / l0");
-  r.set("Center", arr<double>({0, 0, 0}), "fixed point of the stretch");
+  r.set("Stretch", 1.0, "Uniform Stretch: l / l0 (> 0)");
+  setVector(r, refp, "Center", arr<double>({0, 0, 0}), "fixed point of the stretch", Length::Dim);
   auto& so = s->sublist("Solver", false, "nonlinear and linear solvers");
-  so.set("Method", "Newton", "Newton (implicit, NOX) or ADR (explicit adaptive dynamic relaxation)");
+  const std::string sp = "Solver";
+  setChoice(so, sp, "Method", "Newton", {{"Newton", "implicit, NOX"}, {"ADR", "explicit adaptive dynamic relaxation"}});
   so.set("ADR Tolerance", 1e-6, "ADR: stop when both e1 and e2 (seed 001) are below this");
   so.set("ADR Max Iterations", 2000000, "ADR: iterations allowed per load step");
   so.set("ADR Mass Safety", 4.0, "ADR: fictitious mass = safety * 1/4 sum_j |K_ij| (>= 1 for stability)");
-  so.set("Load Steps", 10, "equal load increments to load factor 1");
+  so.set("Load Steps", 10, "equal load increments to load factor 1 (1 to " + std::to_string(kMaxLoadSteps) + ")");
   so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
-  so.set("Max Newton Iterations", 25, "per load step");
-  so.set("Line Search", "Full Step", "globalisation: Full Step, Backtrack or Polynomial (NOX line searches), or Trust Region / Inexact Trust Region (NOX's dogleg trust-region solvers; need the assembled Jacobian)");
+  so.set("Max Newton Iterations", 25, "per load step (1 to " + std::to_string(kMaxNewtonIterations) + ")");
+  setChoice(so, sp, "Line Search", "Full Step",
+            {{"Full Step", ""}, {"Backtrack", ""}, {"Polynomial", "NOX line searches"},
+             {"Trust Region", ""}, {"Inexact Trust Region", "NOX's dogleg trust-region solvers; need the assembled Jacobian"}},
+            "globalisation: ");
   so.set("Adaptive Steps", false, "grow the load increment by 1.5 after steps needing at most 'Easy Iterations' Newton iterations (up to 'Max Increment'); cut-backs still halve it");
-  so.set("Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations");
+  so.set("Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations (>= 0)");
   so.set("Max Increment", 0.25, "adaptive stepping: largest load increment");
-  so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops");
-  so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps)");
+  so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops (0 to " + std::to_string(kMaxCutbacks) + ")");
+  so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps; else Load Steps to " + std::to_string(kMaxTotalSteps) + ")");
   so.set("Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one");
   so.set("Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables");
   so.set("Stability Check", false, "after each converged step, count negative pivots of the tangent (serial LDL^T on rank 0) and stop with a diagnosis when the equilibrium is unstable");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
   so.set("Stagnation Stop", 0, "stop a Newton solve early (and cut back) when its normalised residual has not halved over this many iterations; 0: off (a failed solve is still diagnosed as stagnation over its last 5 iterations)");
-  so.set("Continuation", "Load Stepping", "Load Stepping (load factor 0 to 1 in increments) or Arc Length (pseudo-arc-length continuation through limit points; see the Arc Length sublist)");
+  setChoice(so, sp, "Continuation", "Load Stepping",
+            {{"Load Stepping", "load factor 0 to 1 in increments"},
+             {"Arc Length", "pseudo-arc-length continuation through limit points; see the Arc Length sublist"}});
   auto& al = so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2");
-  al.set("Initial Arc Length", 0.05, "arc length of the first step");
-  al.set("Min Arc Length", 1e-4, "the run stops when a failing step would need a shorter arc");
+  al.set("Initial Arc Length", 0.05, "arc length of the first step (Min Arc Length <= it <= Max Arc Length)");
+  al.set("Min Arc Length", 1e-4, "the run stops when a failing step would need a shorter arc (> 0)");
   al.set("Max Arc Length", 0.5, "the arc grows by 1.5 after steps needing at most 'Solver/Easy Iterations' corrector iterations, up to this");
-  al.set("Max Steps", 100, "converged continuation steps allowed");
+  al.set("Max Steps", 100, "converged continuation steps allowed (1 to " + std::to_string(kMaxArcSteps) + ")");
   al.set("Target Load Factor", 1.0, "stop once the load factor reaches this");
   al.set("Target Deflection", 0.0, "stop once the magnitude of the deflection reaches this (0: no deflection target)");
   al.set("Deflection Probe", "", "name of a Displacement probe whose component 'Deflection Component' is the deflection (for the target and the path)");
-  al.set("Deflection Component", "y", "x, y or z");
-  so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (without .xml), or 'custom'");
+  setChoice(al, "Solver/Arc Length", "Deflection Component", "y", {{"x", ""}, {"y", ""}, {"z", ""}});
+  so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
-  so.set("Jacobian", "Preset", "Assembled (sparse matrix), Matrix-Free (analytic J v from the linearised kernels; nothing assembled), Jacobian-Free (J v by finite differences of the residual), or Preset (as the linear solver preset says; Assembled if it says nothing)");
-  so.set("Preconditioner Matrix", "Preset", "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: Assembled (the full Jacobian), Neighbours (only couplings within one horizon; memory proportional to the family size), or Preset (as the preset says; Neighbours if it says nothing)");
+  setChoice(so, sp, "Jacobian", "Preset",
+            {{"Assembled", "sparse matrix"}, {"Matrix-Free", "analytic J v from the linearised kernels; nothing assembled"},
+             {"Jacobian-Free", "J v by finite differences of the residual"},
+             {"Preset", "as the linear solver preset says; Assembled if it says nothing"}});
+  setChoice(so, sp, "Preconditioner Matrix", "Preset",
+            {{"Assembled", "the full Jacobian"}, {"Neighbours", "only couplings within one horizon; memory proportional to the family size"},
+             {"Preset", "as the preset says; Neighbours if it says nothing"}},
+            "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: ");
   so.set("Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)");
   auto& o = s->sublist("Output", false, "what is written");
   o.set("VTK", true, "write .vtu/.pvtu fields");
   o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
+  // For 'perinox schema': the keys of one entry of each named sublist (nothing reads them).
+  for (const auto& [sub, what] : namedSublists()) {
+    ParameterList& parent = sub == "Holes" ? d.sublist("Holes") : s->sublist(sub);
+    parent.sublist("<name>", false, "one " + what + ", under a name of the scene's choosing").setParameters(templateFor(sub));
+  }
   return s;
 }
 
@@ -349,6 +464,37 @@ void forEachParameter(const ParameterList& l, const std::string& key, const std:
     for (auto c = sub.begin(); c != sub.end(); ++c)
       if (sub.entry(c).isList()) forEachParameter(sub.sublist(sub.name(c)), k + "/" + sub.name(c), p + "/*", f);
   }
+}
+
+/// The values the user gave (before defaults): enumerated strings matched exactly, array
+/// lengths against the dimension.
+void checkGivenValues(const ParameterList& user, int dim, const std::string& file) {
+  forEachParameter(user, "", "", [&](const std::string& key, const std::string& pattern, const Teuchos::ParameterEntry& e) {
+    const auto choices = choiceTable().find(pattern);
+    if (choices != choiceTable().end()) {
+      const auto& allowed = choices->second;
+      const auto ok = [&](const std::string& v) { return std::find(allowed.begin(), allowed.end(), v) != allowed.end(); };
+      if (e.isType<std::string>()) {
+        const std::string v = Teuchos::getValue<std::string>(e);
+        if (!ok(v)) fail(file, "'" + key + "' must be " + orList(allowed) + ", not " + quote(v) + suggestion(v, allowed));
+      } else if (e.isType<Array<std::string>>()) {
+        for (const auto& v : Teuchos::getValue<Array<std::string>>(e))
+          if (!ok(v)) fail(file, "'" + key + "' has " + quote(v) + ", but each entry must be " + orList(allowed) + suggestion(v, allowed));
+      }
+    }
+    const auto rule = lengthTable().find(pattern);
+    if (rule == lengthTable().end()) return;
+    const int n = e.isType<Array<double>>() ? Teuchos::getValue<Array<double>>(e).size() : Teuchos::getValue<Array<int>>(e).size();
+    const int want = rule->second == Length::Three ? 3 : rule->second == Length::DimSquaredOrEmpty ? dim * dim : dim;
+    const bool emptyOk = rule->second == Length::DimOrEmpty || rule->second == Length::DimSquaredOrEmpty;
+    if (n == want || (n == 0 && emptyOk)) return;
+    const std::string why = rule->second == Length::Three ? "x, y and z"
+                            : rule->second == Length::Dim || rule->second == Length::DimOrEmpty
+                                ? "one per axis: Dimension = " + std::to_string(dim)
+                                : "Dimension x Dimension, row-major";
+    fail(file, "'" + key + "' has " + std::to_string(n) + (n == 1 ? " entry" : " entries") + " but needs " +
+                   (emptyOk ? "0 or " : "") + std::to_string(want) + " (" + why + ")");
+  });
 }
 
 /// No number of the scene is infinite or NaN (none of its keys gives a meaning to them).
@@ -572,6 +718,45 @@ int componentIndex(const std::string& c) {
   return -2;
 }
 
+std::string position(const Discretization& d, int p) {
+  std::string s = "(";
+  for (int a = 0; a < d.dim; ++a) s += (a ? ", " : "") + number(d.X[p][a]);
+  return s + ")";
+}
+
+/// The int at path/key, refused outside [lo, hi].
+int intIn(const ParameterList& l, const std::string& path, const std::string& key, int lo, int hi, const std::string& file) {
+  const int v = l.get<int>(key);
+  if (v < lo || v > hi)
+    fail(file, "'" + path + "/" + key + "' must be " +
+                   (hi == INT_MAX ? "at least " + std::to_string(lo) : "from " + std::to_string(lo) + " to " + std::to_string(hi)) +
+                   ", not " + std::to_string(v));
+  return v;
+}
+
+void checkHorizonFactor(double f, const std::string& file) {
+  if (!(f >= 1.0))
+    fail(file, "'Discretization/Horizon Factor' must be at least 1: a horizon below the particle spacing leaves particles without neighbours");
+  if (f > kMaxHorizonFactor)
+    fail(file, "'Discretization/Horizon Factor' must be at most " + number(kMaxHorizonFactor) + " (" + number(f) +
+                   " spacings would give every particle a family of thousands or millions)");
+}
+
+/// The lattice's sites, fictitious layers included, are bounded before any is allocated.
+void checkLatticeSize(const LatticeSpec& ls, const std::string& file) {
+  const int layers = static_cast<int>(std::floor(ls.horizonFactor + 1e-9));
+  double sites = 1;
+  for (int a = 0; a < ls.dim; ++a) {
+    double n = ls.counts[a];
+    for (Side s : ls.fictitiousSides)
+      if (static_cast<int>(s) / 2 == a) n += layers;
+    sites *= n;
+  }
+  if (sites > kMaxParticles)
+    fail(file, "'Discretization' asks for " + number(sites) + " particles (fictitious layers included); at most " +
+                   std::to_string(kMaxParticles) + " are allowed");
+}
+
 /// The reason in a Teuchos exception's text, which spans lines (source location, the failed
 /// test, then the reason): the line that says "error", else the last non-empty line.
 std::string teuchosReason(const std::string& msg) {
@@ -611,6 +796,10 @@ Teuchos::RCP<const ParameterList> sceneSchema() {
 Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir) {
   const auto schema = sceneSchema();
   checkAgainst(pl, *schema, "", file);
+  const auto& given = pl.sublist("Discretization");
+  const int dim = given.isParameter("Dimension") ? given.get<int>("Dimension") : schema->sublist("Discretization").get<int>("Dimension");
+  if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
+  checkGivenValues(pl, dim, file);
   fillDefaults(pl, *schema);
   checkFinite(pl, file);
 
@@ -619,25 +808,16 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   sc.title = pl.get<std::string>("Title");
   auto problem = std::make_shared<ProblemSpec>();
 
-  // --- material ---
+  // --- material --- (enumerated values are checked by checkGivenValues)
   const auto& dl = pl.sublist("Discretization");
-  const int dim = dl.get<int>("Dimension");
-  if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
   const auto& ml = pl.sublist("Material");
   MaterialSpec mat;
   mat.dim = dim;
-  const std::string model = ml.get<std::string>("Model");
-  if (model == "Hencky") mat.kind = MaterialKind::Hencky;
-  else if (model == "Small Strain") mat.kind = MaterialKind::SmallStrain;
-  else fail(file, "'Material/Model' must be Hencky or Small Strain, not '" + model + "'");
-  const std::string plane = ml.get<std::string>("Plane");
-  if (dim == 2) {
-    if (plane == "Plane Strain") mat.planar = PlanarMode::PlaneStrain;
-    else if (plane == "Plane Stress") mat.planar = PlanarMode::PlaneStress;
-    else fail(file, "'Material/Plane' must be Plane Strain or Plane Stress, not '" + plane + "'");
-  } else {
+  mat.kind = ml.get<std::string>("Model") == "Hencky" ? MaterialKind::Hencky : MaterialKind::SmallStrain;
+  if (dim == 2)
+    mat.planar = ml.get<std::string>("Plane") == "Plane Strain" ? PlanarMode::PlaneStrain : PlanarMode::PlaneStress;
+  else
     mat.planar = PlanarMode::None;
-  }
   mat.E = ml.get<double>("Young's Modulus");
   mat.nu = ml.get<double>("Poisson's Ratio");
   if (!(mat.E > 0) || !std::isfinite(mat.E)) fail(file, "'Material/Young's Modulus' must be positive");
@@ -657,54 +837,63 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       ls.upper = vec3(dl.get<Array<double>>("Upper Corner"));
       const auto counts = dl.get<Array<int>>("Particles");
       const double spacing = dl.get<double>("Spacing");
+      for (int a = 0; a < dim; ++a)
+        if (!(ls.upper[a] > ls.lower[a])) fail(file, "'Discretization/Upper Corner' must exceed 'Lower Corner' on every axis");
+      if (!counts.empty() && spacing != 0)
+        fail(file, "'Discretization' gives both Particles and Spacing; give one of them");
       if (!counts.empty()) {
-        if (static_cast<int>(counts.size()) != dim)
-          fail(file, "'Discretization/Particles' needs " + std::to_string(dim) + " counts, one per axis");
         for (int a = 0; a < dim; ++a) {
           if (counts[a] < 1) fail(file, "'Discretization/Particles' counts must be at least 1");
           ls.counts[a] = counts[a];
         }
       } else if (spacing > 0) {
-        for (int a = 0; a < dim; ++a) ls.counts[a] = static_cast<int>(std::lround((ls.upper[a] - ls.lower[a]) / spacing));
+        for (int a = 0; a < dim; ++a) {
+          const double cells = (ls.upper[a] - ls.lower[a]) / spacing;
+          const std::string along = std::string(" along ") + "xyz"[a];
+          if (!(cells <= kMaxParticles))
+            fail(file, "'Discretization/Spacing' = " + number(spacing) + " gives more than " + std::to_string(kMaxParticles) + " particles" + along);
+          ls.counts[a] = static_cast<int>(std::lround(cells));
+          if (ls.counts[a] < 1 || std::abs(cells - ls.counts[a]) > 1e-6 * cells)
+            fail(file, "'Discretization/Spacing' = " + number(spacing) + " does not divide the box" + along + " (" +
+                           number(cells) + " spacings); adjust it or give Particles");
+        }
       } else {
         fail(file, "'Discretization' needs Particles (counts per axis) or a positive Spacing");
       }
-      for (int a = 0; a < dim; ++a)
-        if (!(ls.upper[a] > ls.lower[a])) fail(file, "'Discretization/Upper Corner' must exceed 'Lower Corner' on every axis");
       ls.thickness = thickness;
       ls.horizonFactor = dl.get<double>("Horizon Factor");
-      if (dl.get<double>("Horizon") > 0) fail(file, "'Discretization/Horizon' is for particle files; lattices use 'Horizon Factor'");
-      if (!(ls.horizonFactor >= 1.0))
-        fail(file, "'Discretization/Horizon Factor' must be at least 1: a horizon below the particle spacing leaves particles without neighbours");
+      if (dl.get<double>("Horizon") != 0) fail(file, "'Discretization/Horizon' is for particle files; lattices use 'Horizon Factor'");
+      checkHorizonFactor(ls.horizonFactor, file);
       for (const auto& s : dl.get<Array<std::string>>("Fictitious Sides")) {
-        Side side;
-        if (!parseSide(s, side) || static_cast<int>(side) / 2 >= dim)
-          fail(file, "'Discretization/Fictitious Sides' has an invalid side '" + s + "'");
+        Side side = Side::XMin;
+        parseSide(s, side);
+        if (static_cast<int>(side) / 2 >= dim)
+          fail(file, "'Discretization/Fictitious Sides' has '" + s + "', which is not a side of this " + std::to_string(dim) + "D body");
         ls.fictitiousSides.push_back(side);
       }
+      checkLatticeSize(ls, file);
       ls.jitter = dl.get<double>("Jitter");
       if (ls.jitter < 0 || ls.jitter >= 1) fail(file, "'Discretization/Jitter' must be in [0, 1)");
-      ls.jitterSeed = static_cast<unsigned>(dl.get<int>("Jitter Seed"));
+      ls.jitterSeed = static_cast<unsigned>(intIn(dl, "Discretization", "Jitter Seed", 0, INT_MAX, file));
       const auto& holes = dl.sublist("Holes");
       for (auto h = holes.begin(); h != holes.end(); ++h) {
         const auto& hl = holes.sublist(holes.name(h));
         Hole hole;
-        const std::string shape = hl.get<std::string>("Shape");
         hole.center = vec3(hl.get<Array<double>>("Center"));
-        if (shape == "Circle") {
+        if (hl.get<std::string>("Shape") == "Circle") {
           hole.kind = Hole::Kind::Circle;
           hole.radius = hl.get<double>("Radius");
           if (!(hole.radius > 0)) fail(file, "'Discretization/Holes/" + holes.name(h) + "/Radius' must be positive");
-        } else if (shape == "Rectangle") {
+        } else {
           hole.kind = Hole::Kind::Rectangle;
           hole.halfWidths = vec3(hl.get<Array<double>>("Half Widths"));
-        } else {
-          fail(file, "'Discretization/Holes/" + holes.name(h) + "/Shape' must be Circle or Rectangle");
+          if (!(hole.halfWidths.head(dim).minCoeff() > 0))
+            fail(file, "'Discretization/Holes/" + holes.name(h) + "/Half Widths' must be positive on every axis");
         }
         ls.holes.push_back(hole);
       }
       problem->disc = buildLattice(ls);
-    } else if (dtype == "Particle File") {
+    } else {  // Particle File
       std::string path = dl.get<std::string>("Particle File");
       if (path.empty()) fail(file, "'Discretization/Particle File' is required when Type = Particle File");
       if (path[0] != '/') {
@@ -714,11 +903,15 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       const double spacing = dl.get<double>("Spacing");
       double horizon = dl.get<double>("Horizon");
       if (!(spacing > 0)) fail(file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
-      if (!(horizon > 0)) horizon = dl.get<double>("Horizon Factor") * spacing;
-      if (!(horizon >= spacing)) fail(file, "'Discretization/Horizon' must be at least the spacing");
+      if (horizon < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
+      if (horizon == 0) {
+        checkHorizonFactor(dl.get<double>("Horizon Factor"), file);
+        horizon = dl.get<double>("Horizon Factor") * spacing;
+      }
+      if (!(horizon >= spacing && horizon <= kMaxHorizonFactor * spacing))
+        fail(file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
+                       number(spacing) + " to " + number(kMaxHorizonFactor * spacing) + ")");
       problem->disc = readParticleFile(path, dim, horizon, spacing, thickness);
-    } else {
-      fail(file, "'Discretization/Type' must be Lattice or Particle File, not '" + dtype + "'");
     }
   } catch (const std::invalid_argument& e) {
     fail(file, std::string("Discretization: ") + e.what());
@@ -738,10 +931,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     problem->stabilization = G > 0;
     problem->stab.G = G;
     problem->stab.C = micromodulusC(mat, d.horizon, d.thickness);
-  } else if (stab == "None") {
-    if (G > 0) fail(file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
-  } else {
-    fail(file, "'Model/Stabilization' must be None or Silling, not '" + stab + "'");
+  } else if (G > 0) {
+    fail(file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
   }
 
   // --- heterogeneous modulus ---
@@ -754,8 +945,6 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       const double xr = d.X[p][0] / fl;
       problem->modulusScale[p] = xr <= 0.5 ? 1.0 : 1.0 / (1.0 + fb / (2 * fa) / std::sqrt(xr - 0.5));
     }
-  } else if (field != "Uniform") {
-    fail(file, "'Material/Modulus Field' must be Uniform or Seed001 Bar");
   }
 
   // --- zero-energy controls (seed 001) ---
@@ -777,14 +966,12 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   } else if (ctrl == "Stress Points") {
     if (d.horizon > 1.5 * d.dx) fail(file, "stress points use nearest-neighbour families (seed 001): set 'Discretization/Horizon Factor' below 1.5");
     problem->stressPoints = true;
-    problem->stressPointSeed = static_cast<unsigned>(mo.get<int>("Stress Point Seed"));
-  } else if (ctrl != "None") {
-    fail(file, "'Model/Zero-Energy Control' must be None, Springs, Average Displacement or Stress Points");
+    problem->stressPointSeed = static_cast<unsigned>(intIn(mo, "Model", "Stress Point Seed", 0, INT_MAX, file));
   }
 
   // --- damage ---
   const auto& dm = pl.sublist("Damage");
-  sc.maxBreakRounds = dm.get<int>("Max Break Rounds");
+  sc.maxBreakRounds = intIn(dm, "Damage", "Max Break Rounds", 1, INT_MAX, file);
   if (dm.get<bool>("Enabled")) {
     problem->damage = true;
     problem->damageSpec.sCr = dm.get<double>("Critical Stretch");
@@ -794,24 +981,13 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
       fail(file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
     if (!(ds.beta > 0)) fail(file, "'Damage/Beta' must be positive");
-    const std::string law = dm.get<std::string>("Softening");
-    if (law == "Paper")
-      problem->damageSpec.softening = DamageSpec::Softening::Paper;
-    else if (law == "Continuous")
-      problem->damageSpec.softening = DamageSpec::Softening::Continuous;
-    else
-      fail(file, "'Damage/Softening' must be Paper or Continuous, not '" + law + "'");
-    if (sc.maxBreakRounds < 1) fail(file, "'Damage/Max Break Rounds' must be at least 1");
-    const std::string stall = dm.get<std::string>("On Stall");
-    if (stall == "Break Most Stretched")
-      sc.stallBreak = true;
-    else if (stall != "Stop")
-      fail(file, "'Damage/On Stall' must be Stop or Break Most Stretched, not '" + stall + "'");
+    problem->damageSpec.softening =
+        dm.get<std::string>("Softening") == "Paper" ? DamageSpec::Softening::Paper : DamageSpec::Softening::Continuous;
+    sc.stallBreak = dm.get<std::string>("On Stall") == "Break Most Stretched";
     sc.stallBreakTolerance = dm.get<double>("Stall Break Tolerance");
     if (!(sc.stallBreakTolerance >= 0 && sc.stallBreakTolerance < 1))
       fail(file, "'Damage/Stall Break Tolerance' must be in [0, 1)");
-    sc.maxStallBreaks = dm.get<int>("Max Stall Breaks");
-    if (sc.maxStallBreaks < 1) fail(file, "'Damage/Max Stall Breaks' must be at least 1");
+    sc.maxStallBreaks = intIn(dm, "Damage", "Max Stall Breaks", 1, INT_MAX, file);
     sc.reloadTolerance = dm.get<double>("Reload Tolerance");
     if (!(sc.reloadTolerance > 0 && sc.reloadTolerance < 0.5))
       fail(file, "'Damage/Reload Tolerance' must be in (0, 0.5)");
@@ -824,32 +1000,33 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     const auto& r = rl.sublist(name);
     const std::string type = r.get<std::string>("Type");
     const std::string popName = r.get<std::string>("Population");
-    Population pop = Population::Real;
-    if (popName == "Fictitious") pop = Population::Fictitious;
-    else if (popName == "All") pop = Population::All;
-    else if (popName != "Real") fail(file, "'Regions/" + name + "/Population' must be Real, Fictitious or All");
+    const Population pop = popName == "Fictitious" ? Population::Fictitious : popName == "All" ? Population::All : Population::Real;
+    const bool anyFictitious = std::any_of(d.fictitious.begin(), d.fictitious.end(), [](std::uint8_t f) { return f != 0; });
+    if (!anyFictitious && (type == "All Fictitious" || type == "Fictitious Side" || ((type == "Box" || type == "Nearest") && popName == "Fictitious")))
+      fail(file, "region '" + name + "' selects fictitious particles, but the body has none (see 'Discretization/Fictitious Sides')");
     std::vector<int> ids;
     auto side = [&]() {
-      Side s;
-      if (!parseSide(r.get<std::string>("Side"), s) || static_cast<int>(s) / 2 >= dim)
+      Side s = Side::XMin;
+      parseSide(r.get<std::string>("Side"), s);
+      if (static_cast<int>(s) / 2 >= dim)
         fail(file, "'Regions/" + name + "/Side' is not a side of this " + std::to_string(dim) + "D body");
       return s;
     };
     if (type == "Box") {
       ids = selectBox(d, vec3(r.get<Array<double>>("Lower")), vec3(r.get<Array<double>>("Upper")), pop);
     } else if (type == "Side Layer") {
-      const double t = r.get<double>("Thickness") > 0 ? r.get<double>("Thickness") : d.dx;
+      const double given = r.get<double>("Thickness");
+      if (given < 0) fail(file, "'Regions/" + name + "/Thickness' must be >= 0 (0: one particle spacing)");
+      const double t = given > 0 ? given : d.dx;
       ids = selectSideLayer(d, side(), t * (1 - 1e-9));
     } else if (type == "Fictitious Side") {
       ids = selectFictitiousSide(d, side());
     } else if (type == "Nearest") {
       const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
       if (p >= 0) ids.push_back(p);
-    } else if (type == "All Fictitious" || type == "All Real") {
+    } else {  // All Fictitious or All Real
       for (int i = 0; i < d.size(); ++i)
         if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
-    } else {
-      fail(file, "'Regions/" + name + "/Type' must be Box, Side Layer, Fictitious Side, Nearest, All Fictitious or All Real, not '" + type + "'");
     }
     if (ids.empty()) fail(file, "region '" + name + "' selects no particle");
     sc.regions[name] = ids;
@@ -871,12 +1048,10 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     const auto& b = bl.sublist(name);
     const auto& ids = region("Boundary Conditions/" + name + "/Region", b.get<std::string>("Region"));
     const int comp = componentIndex(b.get<std::string>("Component"));
-    if (comp == -2 || comp >= dim)
+    if (comp >= dim)
       fail(file, "'Boundary Conditions/" + name + "/Component' must be one of x" + std::string(dim > 1 ? ", y" : "") + (dim > 2 ? ", z" : "") + " or all");
     const double value = b.get<double>("Value");
     const auto grad = b.get<Array<double>>("Gradient");
-    if (!grad.empty() && static_cast<int>(grad.size()) != dim)
-      fail(file, "'Boundary Conditions/" + name + "/Gradient' needs " + std::to_string(dim) + " entries");
     for (int p : ids)
       for (int c = 0; c < dim; ++c) {
         if (comp >= 0 && c != comp) continue;
@@ -922,16 +1097,11 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     const std::string type = l.get<std::string>("Type");
     double totalV = 0;
     for (int p : ids) totalV += d.volume[p];
+    // Per unit volume: Total Force spreads over the region; a Traction's layer is one spacing thick.
+    const double scale = type == "Total Force" ? 1.0 / totalV : type == "Traction" ? 1.0 / d.dx : 1.0;
     for (int p : ids) {
       if (d.fictitious[p]) fail(file, "load '" + name + "' acts on fictitious particles; loads go on real particles");
-      for (int c = 0; c < dim; ++c) {
-        double b;
-        if (type == "Total Force") b = value[c] / totalV;
-        else if (type == "Traction") b = value[c] / d.dx;  // a layer one spacing thick carries the traction
-        else if (type == "Body Force") b = value[c];
-        else fail(file, "'Loads/" + name + "/Type' must be Total Force, Traction or Body Force, not '" + type + "'");
-        problem->bodyForce[static_cast<std::size_t>(p) * dim + c] += b;
-      }
+      for (int c = 0; c < dim; ++c) problem->bodyForce[static_cast<std::size_t>(p) * dim + c] += value[c] * scale;
     }
   }
 
@@ -943,9 +1113,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     if (deg != 0.0) {
       if (dim == 1) fail(file, "'Superposed Rotation' needs a 2D or 3D scene");
       const auto& ca = rl.get<Array<double>>("Center");
-      const auto& aa = rl.get<Array<double>>("Axis");
-      if (static_cast<int>(ca.size()) < dim) fail(file, "'Superposed Rotation/Center' needs " + std::to_string(dim) + " entries");
-      Vec3 axis = vec3(aa);
+      Vec3 axis = vec3(rl.get<Array<double>>("Axis"));
       if (dim == 2 && (axis[0] != 0 || axis[1] != 0 || !(axis[2] > 0)))
         fail(file, "'Superposed Rotation/Axis' must be z ({0, 0, 1}) in 2D");
       if (!(axis.norm() > 0)) fail(file, "'Superposed Rotation/Axis' must not be zero");
@@ -957,13 +1125,9 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       // the body: not supported, so say which particle.
       const std::uint8_t all = static_cast<std::uint8_t>((1u << dim) - 1);
       for (int p = 0; p < n; ++p)
-        if (problem->fixedMask[p] != 0 && problem->fixedMask[p] != all) {
-          std::ostringstream m;
-          m << "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " << p
-            << " at (" << d.X[p][0] << ", " << d.X[p][1] << (dim > 2 ? ", " + std::to_string(d.X[p][2]) : std::string())
-            << ") has only some (a roller's direction would have to turn with the body)";
-          fail(file, m.str());
-        }
+        if (problem->fixedMask[p] != 0 && problem->fixedMask[p] != all)
+          fail(file, "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " +
+                         std::to_string(p) + " at " + position(d, p) + " has only some (a roller's direction would have to turn with the body)");
     }
   }
 
@@ -975,8 +1139,6 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     ProbeDef def;
     def.name = name;
     def.quantity = p.get<std::string>("Quantity");
-    if (def.quantity != "Displacement" && def.quantity != "Reaction" && def.quantity != "Profile")
-      fail(file, "'Probes/" + name + "/Quantity' must be Displacement, Reaction or Profile");
     def.particles = region("Probes/" + name + "/Region", p.get<std::string>("Region"));
     sc.probes.push_back(def);
   }
@@ -991,6 +1153,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     sc.reference.stretch = hydrostaticStretch(lameLambda(mat), lameMu(mat), ref.get<double>("Traction"), file);
   } else if (sc.reference.type == "Uniform Stretch") {
     sc.reference.stretch = ref.get<double>("Stretch");
+    if (!(sc.reference.stretch > 0)) fail(file, "'Reference/Stretch' must be positive (l / l0)");
   } else if (sc.reference.type == "Affine") {
     const auto g = ref.get<Array<double>>("Gradient");
     if (static_cast<int>(g.size()) != dim * dim)
@@ -1002,8 +1165,6 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     sc.reference.barAlpha = fa;
     sc.reference.barBeta = fb;
     sc.reference.barLength = fl;
-  } else if (sc.reference.type != "None") {
-    fail(file, "'Reference/Type' must be None, Hydrostatic Hencky, Uniform Stretch, Affine or Seed001 Bar");
   }
   if (sc.reference.type == "Hydrostatic Hencky" || sc.reference.type == "Uniform Stretch")
     sc.reference.H = (sc.reference.stretch - 1.0) * Eigen::Matrix3d::Identity();
@@ -1012,58 +1173,52 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   const auto& so = pl.sublist("Solver");
   SolverSettings& s = sc.solver;
   s.method = so.get<std::string>("Method");
-  if (s.method != "Newton" && s.method != "ADR") fail(file, "'Solver/Method' must be Newton or ADR");
   s.adrTolerance = so.get<double>("ADR Tolerance");
-  s.adrMaxIterations = so.get<int>("ADR Max Iterations");
   if (!(s.adrTolerance > 0 && s.adrTolerance < 1)) fail(file, "'Solver/ADR Tolerance' must be in (0, 1)");
   s.adrMassSafety = so.get<double>("ADR Mass Safety");
   if (!(s.adrMassSafety >= 1.0)) fail(file, "'Solver/ADR Mass Safety' must be at least 1 (the stability bound)");
-  if (s.adrMaxIterations < 1) fail(file, "'Solver/ADR Max Iterations' must be at least 1");
-  s.loadSteps = so.get<int>("Load Steps");
-  if (s.loadSteps < 1) fail(file, "'Solver/Load Steps' must be at least 1");
+  s.adrMaxIterations = intIn(so, "Solver", "ADR Max Iterations", 1, INT_MAX, file);
+  s.loadSteps = intIn(so, "Solver", "Load Steps", 1, kMaxLoadSteps, file);
   s.tolerance = so.get<double>("Tolerance");
   if (!(s.tolerance > 0 && s.tolerance < 1)) fail(file, "'Solver/Tolerance' must be in (0, 1)");
-  s.maxIterations = so.get<int>("Max Newton Iterations");
-  if (s.maxIterations < 1) fail(file, "'Solver/Max Newton Iterations' must be at least 1");
+  s.maxIterations = intIn(so, "Solver", "Max Newton Iterations", 1, kMaxNewtonIterations, file);
   s.lineSearch = so.get<std::string>("Line Search");
-  if (s.lineSearch != "Full Step" && s.lineSearch != "Backtrack" && s.lineSearch != "Polynomial" &&
-      s.lineSearch != "Trust Region" && s.lineSearch != "Inexact Trust Region")
-    fail(file, "'Solver/Line Search' must be Full Step, Backtrack, Polynomial, Trust Region or Inexact Trust Region");
   s.adaptive = so.get<bool>("Adaptive Steps");
-  s.easyIterations = so.get<int>("Easy Iterations");
+  s.easyIterations = intIn(so, "Solver", "Easy Iterations", 0, INT_MAX, file);
   s.maxIncrement = so.get<double>("Max Increment");
   if (!(s.maxIncrement > 0 && s.maxIncrement <= 1)) fail(file, "'Solver/Max Increment' must be in (0, 1]");
-  s.maxCutbacks = so.get<int>("Max Cutbacks");
+  s.maxCutbacks = intIn(so, "Solver", "Max Cutbacks", 0, kMaxCutbacks, file);
   s.maxTotalSteps = so.get<int>("Max Total Steps");
-  if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;
-  if (s.maxTotalSteps < s.loadSteps) fail(file, "'Solver/Max Total Steps' must be at least 'Solver/Load Steps' (or 0)");
+  if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;  // <= 20 x kMaxLoadSteps: no overflow
+  else if (s.maxTotalSteps < s.loadSteps || s.maxTotalSteps > kMaxTotalSteps)
+    fail(file, "'Solver/Max Total Steps' must be 0 (20 x Load Steps) or from 'Solver/Load Steps' (" + std::to_string(s.loadSteps) +
+                   ") to " + std::to_string(kMaxTotalSteps) + ", not " + std::to_string(s.maxTotalSteps));
   s.minIncrement = so.get<double>("Min Increment");
   if (!(s.minIncrement > 0 && s.minIncrement <= 1)) fail(file, "'Solver/Min Increment' must be in (0, 1]");
-  if (s.maxCutbacks < 0) fail(file, "'Solver/Max Cutbacks' must be >= 0");
-  s.verbosity = so.get<int>("Verbosity");
+  s.verbosity = intIn(so, "Solver", "Verbosity", 0, INT_MAX, file);
   s.predictor = so.get<bool>("Predictor");
   s.stabilityCheck = so.get<bool>("Stability Check");
-  s.stagnationStop = so.get<int>("Stagnation Stop");
-  if (s.stagnationStop < 0) fail(file, "'Solver/Stagnation Stop' must be >= 0");
+  s.stagnationStop = intIn(so, "Solver", "Stagnation Stop", 0, INT_MAX, file);
   s.continuation = so.get<std::string>("Continuation");
-  if (s.continuation != "Load Stepping" && s.continuation != "Arc Length")
-    fail(file, "'Solver/Continuation' must be Load Stepping or Arc Length, not '" + s.continuation + "'");
   {
     const auto& al = so.sublist("Arc Length");
     auto& a = s.arc;
     a.initial = al.get<double>("Initial Arc Length");
     a.minimum = al.get<double>("Min Arc Length");
     a.maximum = al.get<double>("Max Arc Length");
-    a.maxSteps = al.get<int>("Max Steps");
+    a.maxSteps = intIn(al, "Solver/Arc Length", "Max Steps", 1, kMaxArcSteps, file);
     a.targetLoadFactor = al.get<double>("Target Load Factor");
     a.targetDeflection = al.get<double>("Target Deflection");
     a.deflectionProbe = al.get<std::string>("Deflection Probe");
     a.deflectionComponent = componentIndex(al.get<std::string>("Deflection Component"));
     if ((s.continuation == "Arc Length" || !a.deflectionProbe.empty()) && (a.deflectionComponent < 0 || a.deflectionComponent >= dim))
       fail(file, "'Solver/Arc Length/Deflection Component' must be a component of this " + std::to_string(dim) + "D scene (x, y or z)");
-    if (!(a.minimum > 0 && a.minimum <= a.initial && a.initial <= a.maximum))
-      fail(file, "'Solver/Arc Length' needs 0 < Min Arc Length <= Initial Arc Length <= Max Arc Length");
-    if (a.maxSteps < 1) fail(file, "'Solver/Arc Length/Max Steps' must be at least 1");
+    const std::string arcs = "; 'Solver/Arc Length' needs 0 < Min Arc Length <= Initial Arc Length <= Max Arc Length";
+    if (!(a.minimum > 0)) fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " is not positive" + arcs);
+    if (!(a.minimum <= a.initial))
+      fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " exceeds 'Initial Arc Length' = " + number(a.initial) + arcs);
+    if (!(a.initial <= a.maximum))
+      fail(file, "'Solver/Arc Length/Initial Arc Length' = " + number(a.initial) + " exceeds 'Max Arc Length' = " + number(a.maximum) + arcs);
     if (!(a.targetLoadFactor > 0)) fail(file, "'Solver/Arc Length/Target Load Factor' must be positive");
     if (!(a.targetDeflection >= 0)) fail(file, "'Solver/Arc Length/Target Deflection' must be >= 0");
     if (!a.deflectionProbe.empty()) {
