@@ -169,7 +169,8 @@ ParameterList onRegion(const std::string& what, const std::string& regionDoc) {
 ParameterList conditionTemplate() {
   const std::string p = "Boundary Conditions/*";
   ParameterList c = onRegion("condition", "name of the region whose particles are constrained");
-  setChoice(c, p, "Component", "all", {{"x", ""}, {"y", ""}, {"z", ""}, {"all", ""}});
+  setChoice(c, p, "Component", "all", {{"x", ""}, {"y", ""}, {"z", ""}, {"all", ""}}, "",
+            "; a component of a particle prescribed by two conditions must get the same value from both");
   c.set("Value", 0.0, "prescribed displacement at load factor 1");
   setVector(c, p, "Gradient", arr<double>({}), "optional: u = Value + Gradient . X", Length::DimOrEmpty);
   return c;
@@ -1043,6 +1044,10 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   problem->prescribed.assign(static_cast<std::size_t>(n) * dim, 0.0);
   problem->bodyForce.assign(static_cast<std::size_t>(n) * dim, 0.0);
   const auto& bl = pl.sublist("Boundary Conditions");
+  // The condition that prescribed each DOF first: another may prescribe it again only with the
+  // same value (overlapping regions at a corner, say), never a different one.
+  std::vector<std::string> conditionNames;
+  std::vector<int> prescribedBy(static_cast<std::size_t>(n) * dim, -1);
   for (auto it = bl.begin(); it != bl.end(); ++it) {
     const std::string name = bl.name(it);
     const auto& b = bl.sublist(name);
@@ -1052,13 +1057,24 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       fail(file, "'Boundary Conditions/" + name + "/Component' must be one of x" + std::string(dim > 1 ? ", y" : "") + (dim > 2 ? ", z" : "") + " or all");
     const double value = b.get<double>("Value");
     const auto grad = b.get<Array<double>>("Gradient");
+    conditionNames.push_back(name);
     for (int p : ids)
       for (int c = 0; c < dim; ++c) {
         if (comp >= 0 && c != comp) continue;
         double v = value;
         for (int a = 0; a < static_cast<int>(grad.size()); ++a) v += grad[a] * d.X[p][a];
+        const std::size_t dof = static_cast<std::size_t>(p) * dim + c;
+        if (prescribedBy[dof] >= 0) {
+          const double old = problem->prescribed[dof];
+          if (std::abs(v - old) > 1e-12 * std::max({std::abs(v), std::abs(old), d.dx}))
+            fail(file, "boundary conditions '" + conditionNames[prescribedBy[dof]] + "' and '" + name + "' prescribe different values (" +
+                           number(old) + " and " + number(v) + ") for component " + "xyz"[c] + " of the particle at " + position(d, p) +
+                           "; a component may be prescribed twice only with the same value");
+          continue;
+        }
+        prescribedBy[dof] = static_cast<int>(conditionNames.size()) - 1;
         problem->fixedMask[p] |= static_cast<std::uint8_t>(1u << c);
-        problem->prescribed[static_cast<std::size_t>(p) * dim + c] = v;
+        problem->prescribed[dof] = v;
       }
   }
   // Rigid-body modes must be constrained: rank of the modes restricted to prescribed DOFs.
