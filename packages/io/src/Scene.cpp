@@ -7,6 +7,7 @@
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Teuchos_XMLParameterListReader.hpp>
+#include <dirent.h>
 
 #include <algorithm>
 #include <cctype>
@@ -758,6 +759,20 @@ void checkLatticeSize(const LatticeSpec& ls, const std::string& file) {
                    std::to_string(kMaxParticles) + " are allowed");
 }
 
+/// The linear-solver presets in presetDir: its *.xml files' names without the extension.
+std::vector<std::string> presetNames(const std::string& presetDir) {
+  std::vector<std::string> names;
+  if (DIR* dir = ::opendir(presetDir.c_str())) {
+    while (const dirent* e = ::readdir(dir)) {
+      const std::string f = e->d_name;
+      if (f.size() > 4 && f[0] != '.' && f.compare(f.size() - 4, 4, ".xml") == 0) names.push_back(f.substr(0, f.size() - 4));
+    }
+    ::closedir(dir);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 /// The reason in a Teuchos exception's text, which spans lines (source location, the failed
 /// test, then the reason): the line that says "error", else the last non-empty line.
 std::string teuchosReason(const std::string& msg) {
@@ -1260,13 +1275,19 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   } else {
     if (so.isSublist("Linear Solver") && so.sublist("Linear Solver").numParams() > 0)
       fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + s.linearSolverName + "'; set the preset to custom");
+    // Names only (no paths): the presets are the files of presetDir.
+    const auto presets = presetNames(presetDir);
+    if (std::find(presets.begin(), presets.end(), s.linearSolverName) == presets.end()) {
+      auto names = presets;
+      names.push_back("custom");
+      fail(file, "'Solver/Linear Solver Preset' = " + quote(s.linearSolverName) + " is not a preset name (" +
+                     (presets.empty() ? "there are no presets in " + presetDir + ", so only custom is possible" : "it must be " + orList(names)) + ")");
+    }
     const std::string presetFile = presetDir + "/" + s.linearSolverName + ".xml";
-    std::ifstream probe(presetFile);
-    if (!probe) fail(file, "'Solver/Linear Solver Preset' = '" + s.linearSolverName + "': no file " + presetFile);
     try {
       s.linearSolver = Teuchos::getParametersFromXmlFile(presetFile);
     } catch (const std::exception& e) {
-      fail(presetFile, std::string("cannot read the solver preset: ") + e.what());
+      fail(presetFile, "cannot read the solver preset: " + teuchosReason(e.what()));
     }
   }
 
