@@ -38,7 +38,7 @@ int usage(int code) {
   return code;
 }
 
-/// A message as one line: line breaks and runs of blanks become one space, at most 400 characters
+/// A message as one line: line breaks and runs of blanks become one space, at most 300 characters
 /// (a message is one sentence; this guards against a library's multi-line text).
 std::string oneLine(const std::string& text) {
   std::string s;
@@ -51,7 +51,7 @@ std::string oneLine(const std::string& text) {
     }
   }
   while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s.size() > 400 ? s.substr(0, 397) + "..." : s;
+  return s.size() > 300 ? s.substr(0, 297) + "..." : s;
 }
 
 std::string envOr(const char* name, const std::string& fallback) {

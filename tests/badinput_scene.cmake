@@ -166,3 +166,14 @@ perinox_bad_input(reference_stretch_negative ${TINY} "'Reference/Stretch' must b
   --set "Reference/Type=Uniform Stretch" --set "Reference/Stretch=-1")
 perinox_bad_sets(${XML}/tension_block.xml
   region_negative_thickness "'Regions/right end/Thickness' must be >= 0" "Regions/right end/Thickness=-1")
+
+# Character references in any form XML allows (decimal and hexadecimal, beyond Latin-1) are read:
+# Teuchos' parser takes only decimal ones below 256, so the scene reader writes the others as UTF-8.
+file(READ ${CMAKE_CURRENT_SOURCE_DIR}/bad_input/tiny.xml PERINOX_TINY_SCENE)
+string(REPLACE "value=\"Tiny tension block (test)\"" "value=\"A &amp; B &#233;&#x4e2d;&#x41;\""
+  PERINOX_REFS_SCENE "${PERINOX_TINY_SCENE}")
+file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/character_references.xml "${PERINOX_REFS_SCENE}")
+add_test(NAME scene_character_references COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_title.py
+  --title "A & B U+00e9U+4e2dA" -- ${mpi_bom} $<TARGET_FILE:perinox> run ${CMAKE_CURRENT_BINARY_DIR}/character_references.xml
+  --output ${PERINOX_TEST_OUT}/scene_character_references --quiet)
+set_tests_properties(scene_character_references PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT=" LABELS unit)

@@ -1092,31 +1092,10 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
         problem->prescribed[dof] = v;
       }
   }
-  // Rigid-body modes must be constrained: rank of the modes restricted to prescribed DOFs.
-  {
-    const int nm = dim == 1 ? 1 : (dim == 2 ? 3 : 6);
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nm, nm);
-    const Vec3 c = 0.5 * (d.boxLower + d.boxUpper);
-    for (int p = 0; p < n; ++p)
-      for (int a = 0; a < dim; ++a) {
-        if (!problem->isFixed(p, a)) continue;
-        Eigen::VectorXd row = Eigen::VectorXd::Zero(nm);
-        row[a] = 1;  // translation a
-        const Vec3 x = (d.X[p] - c) / std::max(d.dx, 1e-300);
-        if (dim == 2) row[2] = a == 0 ? -x[1] : x[0];
-        if (dim == 3) {
-          // rotations about x, y, z: omega x X
-          const Vec3 ex(1, 0, 0), ey(0, 1, 0), ez(0, 0, 1);
-          row[3] = ex.cross(x)[a];
-          row[4] = ey.cross(x)[a];
-          row[5] = ez.cross(x)[a];
-        }
-        M += row * row.transpose();
-      }
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
-    if (es.eigenvalues().minCoeff() <= 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff()))
-      fail(file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
-  }
+  // Rigid-body modes must be constrained: rank of the modes restricted to prescribed DOFs (the
+  // evaluator checks it too, for problems built in C++; here the message names the scene's keys).
+  if (!preventsRigidMotion(*problem))
+    fail(file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
 
   // --- loads ---
   const auto& ll = pl.sublist("Loads");

@@ -273,6 +273,34 @@ std::string readSceneText(const std::string& path) {
   const std::string problem = textProblem(text, line);
   if (!problem.empty()) failAt(path, line, "the scene file contains " + problem + "; a scene is UTF-8 text");
   XmlShape(text, path).check();
+  // Teuchos' parser reads character references only in decimal and below 256, while XML allows
+  // any code point in decimal or hexadecimal (&#x4e2d;): write those beyond ASCII as the UTF-8
+  // characters they stand for, and hexadecimal ones below 128 in decimal.
+  for (std::size_t at = text.find("&#"); at != std::string::npos; at = text.find("&#", at + 1)) {
+    const bool hex = at + 2 < text.size() && text[at + 2] == 'x';
+    const std::size_t first = at + (hex ? 3 : 2), end = text.find(';', at);
+    if (end == std::string::npos || end == first || end - first > 8) continue;
+    const std::string digits = text.substr(first, end - first);
+    if (digits.find_first_not_of(hex ? "0123456789abcdefABCDEF" : "0123456789") != std::string::npos) continue;
+    const unsigned long cp = std::stoul(digits, nullptr, hex ? 16 : 10);
+    std::string with;
+    if (cp < 0x80) {
+      if (!hex) continue;
+      with = "&#" + std::to_string(cp) + ";";
+    } else if (cp < 0x800) {
+      with = {static_cast<char>(0xC0 | (cp >> 6)), static_cast<char>(0x80 | (cp & 0x3F))};
+    } else if (cp < 0x10000) {
+      if (cp >= 0xD800 && cp < 0xE000) continue;  // a surrogate is no character: Teuchos refuses it
+      with = {static_cast<char>(0xE0 | (cp >> 12)), static_cast<char>(0x80 | ((cp >> 6) & 0x3F)),
+              static_cast<char>(0x80 | (cp & 0x3F))};
+    } else if (cp < 0x110000) {
+      with = {static_cast<char>(0xF0 | (cp >> 18)), static_cast<char>(0x80 | ((cp >> 12) & 0x3F)),
+              static_cast<char>(0x80 | ((cp >> 6) & 0x3F)), static_cast<char>(0x80 | (cp & 0x3F))};
+    } else {
+      continue;
+    }
+    text.replace(at, end - at + 1, with);
+  }
   return text;
 }
 
