@@ -81,7 +81,7 @@ int run(int argc, char** argv, const Teuchos::RCP<const Teuchos::Comm<int>>& com
   }
   validateLinearSolverList(*linear, solverFile);  // one sentence for a misspelt key, before any work
   evaluator->set_W_factory(buildLinearSolverFactory(linear, comm->getSize()));
-  evaluator->setLoadFactor(1.0);
+  evaluator->setLoadFactor(1.0);  // the model's parameter p(0): Piro passes on its nominal value, this one
 
   // --- Piro's NOX solver: full Newton until |F| < 1e-12 |F(x0)| (or F at its round-off floor)
   auto piroParams = Teuchos::rcp(new Teuchos::ParameterList("Piro"));
