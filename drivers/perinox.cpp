@@ -13,6 +13,7 @@
 #include <mpi.h>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -57,6 +58,15 @@ std::string oneLine(const std::string& text) {
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return v && *v ? std::string(v) : fallback;
+}
+
+/// The scenes and linear-solver presets: $PERINOX_XML_DIR, else <exe dir>/../share/perinox/xml
+/// (an installed driver), else the source tree this driver was built from.
+std::string xmlDirectory() {
+  std::error_code ec;
+  const auto installed = std::filesystem::read_symlink("/proc/self/exe", ec).parent_path() / "../share/perinox/xml";
+  const bool useInstalled = !ec && std::filesystem::is_directory(installed, ec);
+  return envOr("PERINOX_XML_DIR", useInstalled ? installed.lexically_normal().string() : PERINOX_SOURCE_DIR "/xml");
 }
 
 }  // namespace
@@ -141,7 +151,7 @@ int main(int argc, char** argv) {
     stem = stem.substr(0, stem.rfind('.'));
     opt.outputDir = "out/" + stem;
   }
-  const std::string xmlDir = envOr("PERINOX_XML_DIR", PERINOX_SOURCE_DIR "/xml");
+  const std::string xmlDir = xmlDirectory();
   // PERINOX_PLOT_SCRIPT set and empty: no plots (the tests' setting).
   const char* plotScript = std::getenv("PERINOX_PLOT_SCRIPT");
   opt.plotScript = plotScript ? plotScript : PERINOX_SOURCE_DIR "/drivers/plot_result.py";
