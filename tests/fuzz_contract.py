@@ -68,6 +68,9 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from check_run import own_lines  # noqa: E402  (stderr without mpiexec's banners)
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_PERINOX = os.path.join(REPO, "build", "drivers", "perinox")
 MAX_STDERR_CHARS = 300
@@ -1298,18 +1301,6 @@ def listing(d, ignore=None):
         return {x for x in os.listdir(d) if not (ignore and ignore.match(x))}
     except OSError:
         return set()
-
-
-def own_lines(stderr):
-    """Non-empty stderr lines without mpiexec's banners between dashed rules."""
-    out, inside = [], False
-    for line in stderr.splitlines():
-        if line.startswith("-----"):
-            inside = not inside
-            continue
-        if not inside and line.strip():
-            out.append(line)
-    return out
 
 
 def scan_json(value, where, bad):
