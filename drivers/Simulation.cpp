@@ -392,9 +392,7 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
           what = "'" + k + "' = " + v.second + " in the checkpoint, not in this scene";
           break;
         }
-    throw std::invalid_argument(where + " is for another scene: " + what +
-                                " (only run controls may differ: Max Total Steps, the linear solver, Verbosity, Max "
-                                "Stall Breaks, Output)");
+    throw std::invalid_argument(where + " is for another scene: " + what + " (only run controls may differ, README)");
   }
   // Everything the loop will read, checked now, before any output exists.
   try {

@@ -39,7 +39,7 @@ int usage(int code) {
   return code;
 }
 
-/// A message as one line: line breaks and runs of blanks become one space, at most 300 characters
+/// A message as one line: line breaks and runs of blanks become one space, at most 500 characters (messages are written to stay near 300 with their paths)
 /// (a message is one sentence; this guards against a library's multi-line text).
 std::string oneLine(const std::string& text) {
   std::string s;
@@ -52,7 +52,7 @@ std::string oneLine(const std::string& text) {
     }
   }
   while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s.size() > 300 ? s.substr(0, 297) + "..." : s;
+  return s.size() > 500 ? s.substr(0, 497) + "..." : s;
 }
 
 std::string envOr(const char* name, const std::string& fallback) {
