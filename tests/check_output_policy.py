@@ -165,10 +165,10 @@ def main():
         # replaced as a whole), a checkpoint replaced by the next.
         if accepted(r, "a new folder, trailing slash", ["--output", W("run") + "/"], W("run")):
             with open(W("run", "summary.json"), "a") as f:
-                f.write(" ")
-            before = os.path.getsize(W("run", "summary.json"))
+                f.write("\nOLD RUN\n")  # a trace the new summary cannot hold
             accepted(r, "an existing perinox output folder is replaced", ["--output", W("run")], W("run"))
-            check("  its old files are gone", os.path.getsize(W("run", "summary.json")) != before)
+            with open(W("run", "summary.json")) as f:
+                check("  its old files are gone", "OLD RUN" not in f.read())
             with open(W("run", "extra.txt"), "w") as f:
                 f.write("added by the user\n")
             refused(r, "a perinox output folder with a user's file added", ["--output", W("run")], "extra.txt", work)
