@@ -139,6 +139,39 @@ class FreeRestriction final : public OP {
   mutable RCP<MV> xa_, ya_;
 };
 
+/// Two-stage preconditioner: a smoother S on the operator J itself around a coarse solver V built
+/// from another matrix (symmetric multiplicative): y = S r; y += V (r - J y); y += S (r - J y).
+/// V carries the low frequencies (where an auxiliary operator is spectrally close to J), S the
+/// high ones (where it is not).
+class TwoStageOperator final : public OP {
+ public:
+  TwoStageOperator(RCP<const OP> J, RCP<const OP> S, RCP<const OP> V) : J_(J), S_(S), V_(V) {}
+  RCP<const TMap> getDomainMap() const override { return J_->getDomainMap(); }
+  RCP<const TMap> getRangeMap() const override { return J_->getRangeMap(); }
+  void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
+    const size_t nv = X.getNumVectors();
+    if (y_.is_null() || y_->getNumVectors() != nv) {
+      y_ = rcp(new MV(X.getMap(), nv));
+      r_ = rcp(new MV(X.getMap(), nv));
+      d_ = rcp(new MV(X.getMap(), nv));
+    }
+    S_->apply(X, *y_, mode);
+    J_->apply(*y_, *r_);
+    r_->update(1.0, X, -1.0);
+    V_->apply(*r_, *d_, mode);
+    y_->update(1.0, *d_, 1.0);
+    J_->apply(*y_, *r_);
+    r_->update(1.0, X, -1.0);
+    S_->apply(*r_, *d_, mode);
+    y_->update(1.0, *d_, 1.0);
+    Y.update(alpha, *y_, beta);
+  }
+
+ private:
+  RCP<const OP> J_, S_, V_;
+  mutable RCP<MV> y_, r_, d_;
+};
+
 /// FROSch's two-level Schwarz preconditioner as a Tpetra operator.
 class FroschOperator final : public OP {
  public:
@@ -511,7 +544,6 @@ Teuchos::ParameterList mueluBase(int dim, bool allDofs) {
   Teuchos::ParameterList sp;
   sp.set("chebyshev: degree", 3);
   sp.set("chebyshev: ratio eigenvalue", 7.0);
-  sp.set("chebyshev: min eigenvalue", 1.0);
   sp.set("chebyshev: zero starting solution", true);
   p.set("smoother: params", sp);
   return p;
@@ -574,6 +606,28 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     m.set("sa: use filtered matrix", true);
     m.set("filtered matrix: use lumping", true);
   }
+  {  // muelu-J-dl02 without lumping the dropped couplings onto the diagonal of the filtered matrix
+    auto& m = muelu("muelu-J-dl02-nolump", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("sa: use filtered matrix", true);
+    m.set("filtered matrix: use lumping", false);
+  }
+  {  // muelu-J-dl02 with Chebyshev degree 2 (each degree costs one product with J)
+    auto& m = muelu("muelu-J-dl02-cheb2", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("sa: use filtered matrix", true);
+    m.sublist("smoother: params").set("chebyshev: degree", 2);
+  }
+  {  // muelu-J-dl02 with larger aggregates
+    auto& m = muelu("muelu-J-dl02-agg", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("aggregation: min agg size", 9);
+    m.set("aggregation: max agg size", 30);
+    m.set("sa: use filtered matrix", true);
+  }
   {  // the same as muelu-J-dl with symmetric Gauss-Seidel smoothing
     auto& m = muelu("muelu-J-dl-sgs", "Jacobian", true);
     m.set("aggregation: drop scheme", "distance laplacian");
@@ -625,6 +679,22 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     sp.set("relaxation: sweeps", 1);
     m.set("smoother: params", sp);
   }
+  // (b') the same with a smoother on J itself around the auxiliary V-cycle
+  auto fine = [&](const std::string& base, const std::string& name, const std::string& type, int degree) {
+    c[name] = c[base];
+    auto& fs = c[name].sublist("Fine Smoother");
+    fs.set("Type", type);
+    if (type == "CHEBYSHEV") {
+      fs.sublist("Parameters").set("chebyshev: degree", degree);
+      fs.sublist("Parameters").set("chebyshev: ratio eigenvalue", 7.0);
+      fs.sublist("Parameters").set("chebyshev: zero starting solution", true);
+    } else if (type == "RELAXATION") {
+      fs.sublist("Parameters").set("relaxation: type", "Symmetric Gauss-Seidel");
+      fs.sublist("Parameters").set("relaxation: zero starting solution", true);
+    } else {
+      fs.sublist("Parameters").set("fact: iluk level-of-fill", 0);
+    }
+  };
   {
     auto& m = muelu("q1", "Q1", true);
     m.set("aggregation: drop scheme", "classical");
@@ -643,6 +713,20 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     m.set("aggregation: drop scheme", "classical");
     m.set("aggregation: drop tol", 0.0);
   }
+  fine("aux1.015", "aux1.015+cheb2", "CHEBYSHEV", 2);
+  c["aux1.015+cheb2@ref"] = c["aux1.015+cheb2"];
+  c["aux1.015+cheb2@ref"].set("Build At", "Reference");
+  c["muelu-J-dl02@ref"] = c["muelu-J-dl02"];
+  c["muelu-J-dl02@ref"].set("Build At", "Reference");
+  c["ilu0@ref"] = c["ilu0"];
+  c["ilu0@ref"].set("Build At", "Reference");
+  fine("aux1.015", "aux1.015+cheb3", "CHEBYSHEV", 3);
+  fine("aux1.015", "aux1.015+sgs", "RELAXATION", 1);
+  fine("aux1.015", "aux1.015+ilu0", "RILUK", 0);
+  fine("aux1.5", "aux1.5+cheb2", "CHEBYSHEV", 2);
+  fine("aux1.5", "aux1.5+sgs", "RELAXATION", 1);
+  fine("q1", "q1+cheb2", "CHEBYSHEV", 2);
+  fine("q1", "q1+sgs", "RELAXATION", 1);
   // (c) FROSch two-level Schwarz on the full Jacobian (all-DOF map)
   for (int ov : {1, 2}) {
     for (const char* coarse : {"GDSW", "RGDSW"}) {
@@ -749,6 +833,7 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   Thyra::scale(-1.0, pb.b.ptr());
   // the first assembly also builds the graph; the second is what a Newton iteration pays
   pb.J = ev.assembledJacobian(*pb.x);
+  pb.J = Teuchos::null;  // one copy at a time (the graph stays with the evaluator)
   comm->barrier();
   auto a = Clock::now();
   pb.J = ev.assembledJacobian(*pb.x);
@@ -815,8 +900,22 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   auto t0 = Clock::now();
   RCP<TCrsMatrix> A;  // on the free map
   RCP<TCrsMatrix> Aall;
-  if (matrix == "Jacobian") {
+  // "Build At = Reference": the preconditioner's matrix is taken at the unloaded state (x = 0,
+  // load factor 0: the linear tangent) instead of the state of the system, as a preconditioner
+  // kept from the start of a run would be (the fine smoother of a two-stage candidate still uses
+  // the current J).
+  const bool atReference = cand.get<std::string>("Build At", "State") == "Reference";
+  RCP<Thyra::VectorBase<double>> x0;
+  if (atReference) {
+    x0 = pb.x->clone_v();
+    Thyra::assign(x0.ptr(), 0.0);
+  }
+  if (matrix == "Jacobian" && !atReference) {
     A = pb.J;
+  } else if (matrix == "Jacobian") {
+    pb.ev->setLoadFactor(0.0);
+    A = ev.assembledJacobian(*x0);
+    pb.ev->setLoadFactor(1.0);
   } else if (matrix == "Neighbours") {
     // built once per size (graph), then timed as a Newton iteration would pay it
     if (!pb.nbrBuilt) {
@@ -848,7 +947,15 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
       t0 = Clock::now();
     }
     res.tOnce = entry.tBuild;
-    A = entry.ev->assembledJacobian(*entry.x);
+    if (atReference) {
+      auto xr = entry.x->clone_v();
+      Thyra::assign(xr.ptr(), 0.0);
+      entry.ev->setLoadFactor(0.0);
+      A = entry.ev->assembledJacobian(*xr);
+      entry.ev->setLoadFactor(1.0);
+    } else {
+      A = entry.ev->assembledJacobian(*entry.x);
+    }
   } else if (matrix == "Q1") {
     TEUCHOS_TEST_FOR_EXCEPTION(!allDofs, std::invalid_argument, "Matrix Q1 is built on the all-DOF map");
   } else {
@@ -911,6 +1018,16 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
     throw std::invalid_argument("unknown Preconditioner '" + precType + "'");
   }
   if (!M.is_null() && allDofs) M = rcp(new FreeRestriction(M, ev.ownedFreeMap(), pb.freeToAll));
+  if (cand.isSublist("Fine Smoother")) {
+    // an Ifpack2 smoother on the assembled J around M (see TwoStageOperator)
+    auto& fs = cand.sublist("Fine Smoother");
+    auto S = Ifpack2::Factory::create<RowMatrix>(fs.get<std::string>("Type", "CHEBYSHEV"), pb.J);
+    S->setParameters(fs.sublist("Parameters"));
+    S->initialize();
+    S->compute();
+    RCP<const OP> Jop = pb.matrixFree ? pb.Jmf : RCP<const OP>(pb.J);
+    M = rcp(new TwoStageOperator(Jop, S, M));
+  }
   comm->barrier();
   res.tSetup = seconds(t0);
 
