@@ -8,7 +8,7 @@
 //   bench_preconditioners [--scene xml/tension_block.xml] [--set Sublist/Key=value]...
 //       --sizes 80x40 160x80 ... --candidates NAME|FILE.xml ... [--csv out.csv]
 //       [--state affine|zero] [--tol 1e-10] [--restart 200] [--max-iterations 3000]
-//       [--time-limit 600] [--verbose] [--list]
+//       [--time-limit 600] [--operator assembled|matrix-free] [--tag TEXT] [--verbose] [--list]
 //
 // The linear system: J = df/dx and b = -f at load factor 1 and the state chosen by --state:
 // "affine" (default) is the scene's analytic reference displacement (Reference/Type = Affine) on
@@ -25,6 +25,11 @@
 //   Preconditioner    Ifpack2 | MueLu | FROSch | None
 //   Ifpack2 Type      (Ifpack2) e.g. RILUK, RELAXATION
 //   Parameters        sublist handed to Ifpack2, MueLu or FROSch as it is
+//   Fine Smoother     optional sublist {Type (an Ifpack2 type), Parameters}: a smoother on the
+//                     assembled J around the preconditioner (two-stage: S, V, S; TwoStageOperator)
+//   Build At          State (default) | Reference: the preconditioner's matrix at the unloaded
+//                     state (x = 0, load factor 0), as one kept from the start of a run would be
+//   Overlap           (FROSch) overlap in graph layers
 // MueLu gets the rigid-body modes (zero on prescribed DOFs) as "Nullspace" and the particle
 // positions as "Coordinates" (user data); FROSch gets the same through initialize().
 // All Trilinos solver headers stay in this translation unit.
@@ -767,7 +772,7 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
 struct Result {
   std::string status = "converged";
   int iterations = -1;
-  double trueResidual = NAN, tMatrix = 0, tSetup = 0, tSolve = 0, tOnce = 0;
+  double trueResidual = NAN, tMatrix = 0, tSetup = 0, tSolve = 0, tOnce = 0, tFine = 0;  // tFine: part of tSetup
   long long precNnz = 0;
   int levels = 0;
   double complexity = NAN;
@@ -985,6 +990,16 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
     user.set("Nullspace", rigidBodyModes(pb, allDofs, cand.get<bool>("Zero Prescribed Nullspace", false)));
     const bool perDof = !allDofs && params.get<int>("number of equations", 1) == 1;
     if (allDofs || perDof) user.set("Coordinates", coordinates(pb, perDof));
+    // On more than one rank the coarse level is gathered onto one rank: MueLu's coarse KLU2
+    // (Amesos2) solves a distributed coarse matrix wrongly in this build without saying so
+    // (q1+cheb2 at 80 x 40: 12 GMRES iterations on one rank, 23 on two; 12 with this).
+    if (comm->getSize() > 1 && (allDofs || perDof) && !params.isParameter("repartition: enable")) {
+      params.set("repartition: enable", true);
+      params.set("repartition: min rows per proc", 4000);
+      params.set("repartition: start level", 1);  // the default (2) leaves a two-level hierarchy's coarse level distributed
+      params.set("repartition: partitioner", "zoltan2");
+      params.sublist("repartition: params").set("algorithm", "multijagged");
+    }
     if (verbose) params.set("verbosity", "high");
     RCP<OP> Aop = allDofs ? RCP<OP>(Aall) : RCP<OP>(A);
     auto mp = MueLu::CreateTpetraPreconditioner<double, LO, GO, Node>(Aop, params);
@@ -1021,10 +1036,13 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   if (cand.isSublist("Fine Smoother")) {
     // an Ifpack2 smoother on the assembled J around M (see TwoStageOperator)
     auto& fs = cand.sublist("Fine Smoother");
+    const auto tf = Clock::now();
     auto S = Ifpack2::Factory::create<RowMatrix>(fs.get<std::string>("Type", "CHEBYSHEV"), pb.J);
     S->setParameters(fs.sublist("Parameters"));
     S->initialize();
     S->compute();
+    res.tFine = seconds(tf);
+    if (verbose && comm->getRank() == 0) std::cout << "fine smoother: " << S->description() << std::endl;
     RCP<const OP> Jop = pb.matrixFree ? pb.Jmf : RCP<const OP>(pb.J);
     M = rcp(new TwoStageOperator(Jop, S, M));
   }
@@ -1077,7 +1095,7 @@ int usage(int code) {
   (code ? std::cerr : std::cout)
       << "usage: bench_preconditioners [--scene SCENE.xml] [--set Sublist/Key=value]... --sizes NXxNY[xNZ]...\n"
          "         --candidates NAME|FILE.xml... [--csv FILE] [--state affine|zero] [--tol 1e-10]\n"
-         "         [--operator assembled|matrix-free]\n"
+         "         [--operator assembled|matrix-free] [--tag TEXT (first CSV column)]\n"
          "         [--restart 200] [--max-iterations 3000] [--time-limit 600] [--verbose] [--list]\n";
   return code;
 }
@@ -1089,7 +1107,7 @@ int main(int argc, char** argv) {
   auto comm = Teuchos::DefaultComm<int>::getComm();
   const bool root = comm->getRank() == 0;
   std::string scenePath = std::string(PERINOX_SOURCE_DIR) + "/xml/tension_block.xml";
-  std::string csvPath, state = "affine", op = "assembled";
+  std::string csvPath, state = "affine", op = "assembled", tag;
   std::vector<std::string> sets, sizes, candidates;
   double tol = 1e-10, timeLimit = 600;
   int restart = 200, maxIters = 3000;
@@ -1110,6 +1128,7 @@ int main(int argc, char** argv) {
     else if (a == "--csv") csvPath = next();
     else if (a == "--state") state = next();
     else if (a == "--operator") op = next();
+    else if (a == "--tag") tag = next();
     else if (a == "--tol") tol = std::stod(next());
     else if (a == "--restart") restart = std::stoi(next());
     else if (a == "--max-iterations") maxIters = std::stoi(next());
@@ -1139,9 +1158,9 @@ int main(int argc, char** argv) {
     const bool fresh = !probe.good() || probe.peek() == std::ifstream::traits_type::eof();
     csv.open(csvPath, std::ios::app);
     if (fresh)
-      csv << "lattice,particles,free_dofs,ranks,state,operator,candidate,matrix,dof_map,preconditioner,prec_nnz,levels,"
+      csv << "tag,lattice,particles,free_dofs,ranks,state,operator,candidate,matrix,dof_map,preconditioner,prec_nnz,levels,"
              "op_complexity,status,iterations,true_rel_residual,t_residual_s,t_matvec_s,t_jv_matrix_free_s,"
-             "t_assemble_J_s,t_once_s,t_prec_matrix_s,t_setup_s,t_solve_s,setup_in_residuals,solve_in_residuals,total_in_residuals,"
+             "t_assemble_J_s,t_once_s,t_prec_matrix_s,t_fine_smoother_s,t_setup_s,t_solve_s,setup_in_residuals,solve_in_residuals,total_in_residuals,"
              "per_iteration_in_residuals,note\n";
   }
   if (root)
@@ -1198,12 +1217,12 @@ int main(int argc, char** argv) {
                     r.tSetup / tr, solveR, setupR + solveR, r.note.empty() ? "" : "  ", r.note.substr(0, 120).c_str());
         std::fflush(stdout);
         if (csv.is_open()) {
-          csv << size << ',' << pb.realParticles << ',' << pb.ev->numFreeDofs() << ',' << comm->getSize() << ','
+          csv << tag << ',' << size << ',' << pb.realParticles << ',' << pb.ev->numFreeDofs() << ',' << comm->getSize() << ','
               << state << ',' << op << ',' << cname << ',' << cand.get<std::string>("Matrix", "Jacobian") << ','
               << cand.get<std::string>("DOF Map", "Free") << ',' << cand.get<std::string>("Preconditioner", "None")
               << ',' << r.precNnz << ',' << r.levels << ',' << r.complexity << ',' << r.status << ','
               << r.iterations << ',' << r.trueResidual << ',' << tr << ',' << pb.tMatvec << ',' << pb.tJvMf
-              << ',' << pb.tAssemble << ',' << r.tOnce << ',' << r.tMatrix << ',' << r.tSetup << ',' << r.tSolve << ',' << setupR << ',' << solveR << ','
+              << ',' << pb.tAssemble << ',' << r.tOnce << ',' << r.tMatrix << ',' << r.tFine << ',' << r.tSetup << ',' << r.tSolve << ',' << setupR << ',' << solveR << ','
               << setupR + solveR << ',' << perIt << ',' << r.note << '\n';
           csv.flush();
         }
