@@ -14,7 +14,9 @@
 // "affine" (default) is the scene's analytic reference displacement (Reference/Type = Affine) on
 // the free DOFs, within discretisation error of the converged state, so J is the tangent a late
 // Newton iteration sees; "zero" is x = 0 (prescribed DOFs at their full values), the first Newton
-// iteration of a one-step solve without a predictor. GMRES (Belos pseudo-block GMRES, right
+// iteration of a one-step solve without a predictor (the full prescribed displacement as a jump
+// between the loaded layers and the body); "predictor" is J at x = 0 and load factor 0 with
+// b = -df/dlambda, the tangent-predictor solve that starts a perinox run. GMRES (Belos pseudo-block GMRES, right
 // preconditioning, x0 = 0) runs to |b - J x| <= tol |b|; the true residual is checked afterwards.
 //
 // A candidate is a parameter list (built in: --list; or an XML file, named by its file name):
@@ -239,8 +241,8 @@ void residual(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x
 /// x on the free DOFs of ev from the scene's affine reference (or zero).
 void setState(const Scene& scene, const PeridynamicEvaluator& ev, const std::string& state, Thyra::VectorBase<double>& x) {
   Thyra::assign(Teuchos::ptrFromRef(x), 0.0);
-  if (state == "zero") return;
-  if (state != "affine") throw std::invalid_argument("--state must be affine or zero");
+  if (state == "zero" || state == "predictor") return;
+  if (state != "affine") throw std::invalid_argument("--state must be affine, zero or predictor");
   if (scene.reference.type == "None")
     throw std::invalid_argument("--state affine needs the scene's Reference (an analytic displacement)");
   std::vector<std::pair<long long, double>> values;
@@ -799,7 +801,9 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   sets.push_back("Discretization/Particles=" + arr + "}");
   pb.scene = loadScene(scenePath, sets, presetDir);
   pb.ev = rcp(new PeridynamicEvaluator(comm, pb.scene.problem));
-  pb.ev->setLoadFactor(1.0);
+  // "predictor": the first linear solve of a run with prescribed motion, the tangent predictor
+  // J(0, 0) dx/dlambda = -df/dlambda (the linear tangent of the unloaded body)
+  pb.ev->setLoadFactor(state == "predictor" ? 0.0 : 1.0);
   const PeridynamicEvaluator& ev = *pb.ev;
   const int D = ev.problem().dim();
   pb.x = Thyra::createMember(ev.get_x_space());
@@ -835,6 +839,7 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
     t.push_back(seconds(a));
   }
   pb.tResidual = median(t);
+  if (state == "predictor") ev.loadDerivative(*pb.x, *pb.b);
   Thyra::scale(-1.0, pb.b.ptr());
   // the first assembly also builds the graph; the second is what a Newton iteration pays
   pb.J = ev.assembledJacobian(*pb.x);
@@ -858,7 +863,7 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   // the matrix-free product at the same state
   pb.mfEv = rcp(new PeridynamicEvaluator(comm, pb.scene.problem));
   pb.mfEv->setJacobian(JacobianMode::MatrixFree, PreconditionerMatrix::Neighbours, Teuchos::null);
-  pb.mfEv->setLoadFactor(1.0);
+  pb.mfEv->setLoadFactor(ev.loadFactor());
   pb.mfW = pb.mfEv->create_W_op();
   {
     auto xm = Thyra::createMember(pb.mfEv->get_x_space());
@@ -918,9 +923,10 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   if (matrix == "Jacobian" && !atReference) {
     A = pb.J;
   } else if (matrix == "Jacobian") {
+    const double keep = pb.ev->loadFactor();
     pb.ev->setLoadFactor(0.0);
     A = ev.assembledJacobian(*x0);
-    pb.ev->setLoadFactor(1.0);
+    pb.ev->setLoadFactor(keep);
   } else if (matrix == "Neighbours") {
     // built once per size (graph), then timed as a Newton iteration would pay it
     if (!pb.nbrBuilt) {
@@ -941,7 +947,7 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
       P->disc.horizon = factor * P->disc.dx;
       buildFamilies(P->disc);
       entry.ev = rcp(new PeridynamicEvaluator(comm, P));
-      entry.ev->setLoadFactor(1.0);
+      entry.ev->setLoadFactor(ev.loadFactor());
       TEUCHOS_TEST_FOR_EXCEPTION(!entry.ev->ownedFreeMap()->isSameAs(*ev.ownedFreeMap()), std::logic_error,
                                  "the auxiliary problem has another free-DOF map");
       entry.x = Thyra::createMember(entry.ev->get_x_space());
@@ -955,9 +961,10 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
     if (atReference) {
       auto xr = entry.x->clone_v();
       Thyra::assign(xr.ptr(), 0.0);
+      const double keep = entry.ev->loadFactor();
       entry.ev->setLoadFactor(0.0);
       A = entry.ev->assembledJacobian(*xr);
-      entry.ev->setLoadFactor(1.0);
+      entry.ev->setLoadFactor(keep);
     } else {
       A = entry.ev->assembledJacobian(*entry.x);
     }

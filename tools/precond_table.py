@@ -25,9 +25,14 @@ def main():
             and (a.tag is None or r.get("tag", "") == a.tag)]
     lattices = list(OrderedDict.fromkeys(r["lattice"] for r in rows))
     cands = a.candidates or list(OrderedDict.fromkeys(r["candidate"] for r in rows))
-    last = {}
+    last, runs = {}, {}
     for r in rows:
         last[(r["candidate"], r["lattice"])] = r  # a later run of the same pair replaces an earlier one
+        runs.setdefault((r["candidate"], r["lattice"]), []).append(r)
+
+    def med(c, l, key):
+        v = sorted(float(r[key]) for r in runs[(c, l)] if r["status"] != "failed")
+        return v[len(v) // 2] if v else float("nan")
     parts = {l: next(r["particles"] for r in rows if r["lattice"] == l) for l in lattices}
 
     def cell(c, l, f):
@@ -45,14 +50,28 @@ def main():
         growth = f"{int(its[-1]['iterations']) / int(its[0]['iterations']):.2f}" if len(its) > 1 else ""
         print(f"| {c} | " + " | ".join(cell(c, l, iters) for l in lattices) + f" | {growth} |")
     print()
-    print("set-up (preconditioner matrix + preconditioner) / solve, in residual evaluations of the same run:")
+    print("set-up (preconditioner matrix + preconditioner) + solve, in residual evaluations of the same run"
+          " (median over the runs of that pair):")
     print()
     print("| candidate | " + " | ".join(f"{int(parts[l]):,}".replace(",", " ") for l in lattices) + " |")
     print("|---|" + "---|" * len(lattices))
     for c in cands:
         print(f"| {c} | " + " | ".join(
-            cell(c, l, lambda r: f"{float(r['setup_in_residuals']):.0f} + {float(r['solve_in_residuals']):.0f}")
+            cell(c, l, lambda r: f"{med(c, l, 'setup_in_residuals'):.0f} + {med(c, l, 'solve_in_residuals'):.0f}")
             for l in lattices) + " |")
+    print()
+    print("| per lattice | " + " | ".join(f"{int(parts[l]):,}".replace(",", " ") for l in lattices) + " |")
+    print("|---|" + "---|" * len(lattices))
+    for key, label, fmt in [("t_residual_s", "one residual evaluation, s", "{:.4f}"),
+                            ("t_assemble_J_s", "assembling J, residuals", None),
+                            ("t_matvec_s", "J v assembled, residuals", None),
+                            ("t_jv_matrix_free_s", "J v matrix-free, residuals", None)]:
+        vals = []
+        for l in lattices:
+            rs = [r for r in rows if r["lattice"] == l]
+            v = sorted(float(r[key]) / (1.0 if fmt else float(r["t_residual_s"])) for r in rs)
+            vals.append((fmt or "{:.2f}").format(v[len(v) // 2]) if v else "")
+        print(f"| {label} | " + " | ".join(vals) + " |")
 
 
 if __name__ == "__main__":
