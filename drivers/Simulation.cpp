@@ -28,6 +28,7 @@
 #include "perinox/io/Output.hpp"
 #include "perinox/io/OutputFolder.hpp"
 #include "perinox/solver/AdrSolver.hpp"
+#include "perinox/solver/AuxiliaryOperators.hpp"
 #include "perinox/solver/ArcLength.hpp"
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/LinearSolverValidation.hpp"
@@ -1000,12 +1001,16 @@ Teuchos::RCP<PeridynamicEvaluator> buildEvaluator(const Scene& scene, const Teuc
                                                            : "preset '" + scene.solver.linearSolverName + "'");
   auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, scene.problem));
   const auto linearParams = Teuchos::rcp(new Teuchos::ParameterList(*scene.solver.linearSolver));
+  // The two-stage preconditioner (preset scalable) gets its auxiliary operator from the model.
+  std::shared_ptr<AuxiliarySource> auxiliary;
+  if (linearParams->get<std::string>("Preconditioner Type", "None") == twoStageName())
+    auxiliary = makeAuxiliarySource(evaluator, linearParams->sublist("Preconditioner Types").sublist(twoStageName()));
   if (scene.solver.jacobian == "Assembled" || scene.solver.method != "Newton") {
-    evaluator->set_W_factory(buildLinearSolverFactory(linearParams, comm->getSize()));
+    evaluator->set_W_factory(buildLinearSolverFactory(linearParams, comm->getSize(), auxiliary));
   } else {
     // Matrix-free: Belos without a preconditioner of its own; the model builds the
     // preconditioner from the matrix the scene names.
-    auto split = buildSplitLinearSolver(linearParams, comm->getSize());
+    auto split = buildSplitLinearSolver(linearParams, comm->getSize(), auxiliary);
     evaluator->set_W_factory(split.krylov);
     evaluator->setJacobian(scene.solver.jacobian == "Matrix-Free" ? JacobianMode::MatrixFree : JacobianMode::JacobianFree,
                            scene.solver.preconditionerMatrix == "Assembled" ? PreconditionerMatrix::Assembled

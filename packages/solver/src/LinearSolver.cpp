@@ -2,6 +2,7 @@
 #include "perinox/solver/LinearSolver.hpp"
 
 #include "perinox/solver/MumpsSolver.hpp"
+#include "perinox/solver/TwoStagePreconditioner.hpp"
 
 #include <Stratimikos_DefaultLinearSolverBuilder.hpp>
 #include <Stratimikos_MueLuHelpers.hpp>
@@ -31,7 +32,21 @@ std::invalid_argument invalidParameters(const std::exception& e) {
   return std::invalid_argument("invalid linear solver parameters: " + out);
 }
 
-void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder) {
+/// Makes the Two-Stage factory with the caller's auxiliary source (Stratimikos asks for a fresh
+/// factory object whenever it builds a strategy).
+class TwoStageFactoryMaker final : public Teuchos::AbstractFactory<Thyra::PreconditionerFactoryBase<double>> {
+ public:
+  explicit TwoStageFactoryMaker(std::shared_ptr<AuxiliarySource> source) : source_(std::move(source)) {}
+  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> create() const override {
+    return twoStagePreconditionerFactory(source_);
+  }
+
+ private:
+  std::shared_ptr<AuxiliarySource> source_;
+};
+
+void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder,
+                     const std::shared_ptr<AuxiliarySource>& auxiliary = nullptr) {
   using Base = Thyra::PreconditionerFactoryBase<double>;
   using Impl = Thyra::Ifpack2PreconditionerFactory<Tpetra::CrsMatrix<double, int, long long, Node>>;
   builder.setPreconditioningStrategyFactory(Teuchos::abstractFactoryStd<Base, Impl>(), "Ifpack2");
@@ -39,6 +54,7 @@ void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder) {
   builder.setLinearSolveStrategyFactory(
       Teuchos::abstractFactoryStd<Thyra::LinearOpWithSolveFactoryBase<double>, MumpsLinearOpWithSolveFactory>(),
       "MUMPS");
+  builder.setPreconditioningStrategyFactory(Teuchos::rcp(new TwoStageFactoryMaker(auxiliary)), twoStageName());
 }
 }  // namespace
 
@@ -65,7 +81,7 @@ Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters() {
 }
 
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
-    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks) {
+    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks, const std::shared_ptr<AuxiliarySource>& auxiliary) {
   const std::string type = params->get<std::string>("Linear Solver Type", "Belos");
   if (type == "Amesos2" && nranks > 1)
     throw std::invalid_argument(
@@ -78,7 +94,7 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
         "Linear Solver Type 'Amesos' and preconditioners 'Ifpack'/'ML' work on Epetra only; "
         "use Amesos2, Ifpack2 or MueLu");
   Stratimikos::DefaultLinearSolverBuilder builder;
-  registerSolvers(builder);
+  registerSolvers(builder, auxiliary);
   try {
     builder.setParameterList(params);
   } catch (const std::exception& e) {
@@ -87,7 +103,8 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
   return builder.createLinearSolveStrategy("");
 }
 
-SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks) {
+SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks,
+                                         const std::shared_ptr<AuxiliarySource>& auxiliary) {
   if (params->get<std::string>("Linear Solver Type", "Belos") != "Belos")
     throw std::invalid_argument(
         "a matrix-free or Jacobian-free Newton solve needs a Krylov solver: 'Linear Solver Type' must "
@@ -98,7 +115,7 @@ SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterLi
   s.krylov = buildLinearSolverFactory(krylov, nranks);
   if (params->get<std::string>("Preconditioner Type", "None") != "None") {
     Stratimikos::DefaultLinearSolverBuilder builder;
-    registerSolvers(builder);
+    registerSolvers(builder, auxiliary);
     try {
       builder.setParameterList(Teuchos::rcp(new Teuchos::ParameterList(*params)));
     } catch (const std::exception& e) {

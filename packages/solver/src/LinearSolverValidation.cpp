@@ -16,6 +16,7 @@
 #include "perinox/solver/LinearSolverValidation.hpp"
 
 #include "perinox/solver/LinearSolver.hpp"
+#include "perinox/solver/TwoStagePreconditioner.hpp"
 
 #include <Ifpack2_BlockRelaxation_decl.hpp>
 #include <Ifpack2_Details_Factory.hpp>
@@ -297,6 +298,8 @@ class Checker {
         ifpack2(sub, validSub, key);
       } else if (name == "MueLu") {
         muelu(sub, key);
+      } else if (name == twoStageName()) {
+        twoStage(sub, validSub, key);
       } else {
         const bool vowel = std::string("AEIOUaeiou").find(name.empty() ? 'x' : name[0]) != std::string::npos;
         checkList(sub, validSub, key, (vowel ? "an " : "a ") + name + " parameter");
@@ -402,6 +405,25 @@ class Checker {
       if (!own->isParameter(name))
         failWithHint("'" + key + "' is not a parameter of Ifpack2 Prec Type " + type, name, namesOf(*own), "known for it");
       checkEntry(settings.entry(it), own->getEntry(name), name, key, "an Ifpack2 " + type + " parameter");
+    }
+  }
+
+  // perinox's two-stage preconditioner: its own keys, and MueLu's list for the auxiliary
+  // hierarchy; the fine smoother's Ifpack2 list is passed on (Ifpack2 checks it at set-up).
+  void twoStage(const ParameterList& user, const ParameterList& valid, const std::string& path) const {
+    for (auto it = user.begin(); it != user.end(); ++it) {
+      const std::string& name = user.name(it);
+      const ParameterEntry& e = user.entry(it);
+      const std::string key = path + "/" + name;
+      if (!valid.isParameter(name))
+        failWithHint("'" + key + "' is not a Two-Stage parameter", name, namesOf(valid), "known here");
+      if (name == "MueLu" && e.isList()) {
+        muelu(Teuchos::getValue<ParameterList>(e), key);
+      } else if (name == "Fine Smoother Parameters" && e.isList()) {
+        continue;
+      } else {
+        checkEntry(e, valid.getEntry(name), name, key, "a Two-Stage parameter");
+      }
     }
   }
 

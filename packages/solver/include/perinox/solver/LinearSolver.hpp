@@ -7,7 +7,11 @@
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
 #include <Thyra_PreconditionerFactoryBase.hpp>
 
+#include <memory>
+
 namespace perinox {
+
+class AuxiliarySource;  // TwoStagePreconditioner.hpp
 
 /// Default Stratimikos parameters: Belos block GMRES (the tangent is not always symmetric
 /// once damage is on) with an Ifpack2 ILU(k) preconditioner.
@@ -15,9 +19,12 @@ Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters();
 
 /// Builds the factory. Throws std::invalid_argument with a clear sentence when the choice is
 /// unusable here: the Amesos2 direct solver on more than one rank (this Trilinos build's
-/// KLU2 returns wrong answers in parallel), unknown solver or preconditioner names.
+/// KLU2 returns wrong answers in parallel), unknown solver or preconditioner names. auxiliary
+/// feeds "Preconditioner Type" = "Two-Stage" (the `scalable` preset; makeAuxiliarySource in
+/// AuxiliaryOperators.hpp makes perinox's); without it that preconditioner refuses to set up.
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
-    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks);
+    const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks,
+    const std::shared_ptr<AuxiliarySource>& auxiliary = nullptr);
 
 /// For matrix-free solves: the Krylov solver with no preconditioner of its own, and the
 /// preconditioner factory named by "Preconditioner Type" (null for None), which the model
@@ -26,7 +33,8 @@ struct SplitLinearSolver {
   Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> krylov;
   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> preconditioner;
 };
-SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks);
+SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks,
+                                         const std::shared_ptr<AuxiliarySource>& auxiliary = nullptr);
 
 /// Valid Stratimikos parameters (for validation before any work).
 Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters();

@@ -1,0 +1,79 @@
+#pragma once
+// The two-stage preconditioner of the `scalable` preset (docs/performance.md, "Preconditioner
+// study for issue 19"): a smoother S on the Jacobian J itself around one algebraic-multigrid
+// V-cycle V of an auxiliary matrix A, a local elasticity operator on the same particles,
+// symmetric multiplicative:
+//
+//     y = S r;   y += V (r - J y);   y += S (r - J y).
+//
+// A discretises the same elasticity as J and is spectrally equivalent to it uniformly in the
+// resolution, so V removes the smooth error whatever the particle count; S removes the
+// oscillatory error where J and A differ (the wide horizon, the stabilisation). A lives on an
+// "all-DOF" map (every component of every owned particle, prescribed components as scaled unit
+// rows) so that MueLu sees a constant block size; the preconditioner restricts it to J's free
+// DOFs. An AuxiliarySource supplies A; this header knows no peridynamics (a host application may
+// supply its own).
+#include <Teuchos_ParameterList.hpp>
+#include <Teuchos_RCP.hpp>
+#include <Thyra_PreconditionerFactoryBase.hpp>
+#include <Tpetra_CrsMatrix_fwd.hpp>
+#include <Tpetra_MultiVector_fwd.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace perinox {
+
+/// What the two-stage preconditioner needs besides J.
+struct AuxiliaryOperator {
+  /// The auxiliary matrix on the all-DOF map: blockSize consecutive rows per particle.
+  Teuchos::RCP<const Tpetra::CrsMatrix<double, int, long long>> matrix;
+  /// Its near-null space (the rigid-body modes) on the all-DOF map.
+  Teuchos::RCP<const Tpetra::MultiVector<double, int, long long>> nullspace;
+  /// Particle coordinates, one row per particle (the map of the owned particles), dim columns.
+  Teuchos::RCP<const Tpetra::MultiVector<double, int, long long>> coordinates;
+  /// J's local row k (an owned free DOF) is the all-DOF map's local row freeToAll[k].
+  std::vector<int> freeToAll;
+  int blockSize = 1;
+  /// Changes whenever the matrix does: the multigrid hierarchy is rebuilt only then.
+  long long version = 0;
+};
+
+/// Supplies the auxiliary operator; asked once per preconditioner set-up (every Newton iteration).
+class AuxiliarySource {
+ public:
+  virtual ~AuxiliarySource() = default;
+  /// The operator for the Jacobian about to be preconditioned (the same version while A does
+  /// not change, e.g. until bonds break).
+  virtual const AuxiliaryOperator& current() = 0;
+  /// One line for the log: which operator, its size.
+  virtual std::string description() const = 0;
+};
+
+/// Stratimikos' name of the strategy ("Preconditioner Type" = "Two-Stage").
+inline const char* twoStageName() { return "Two-Stage"; }
+
+/// The Thyra preconditioner factory (registered in Stratimikos by buildLinearSolverFactory when
+/// given a source). Its parameter list ("Preconditioner Types/Two-Stage"):
+///   "Fine Smoother" (string, an Ifpack2 type, default CHEBYSHEV) and its "Fine Smoother
+///   Parameters" (Ifpack2 list; default Chebyshev degree 2, eigenvalue ratio 7);
+///   "MueLu" (MueLu's list for the hierarchy of A);
+///   "Auxiliary Operator" (Auto | Lattice FEM | Short Horizon) and "Auxiliary Horizon Factor"
+///   (for Short Horizon), read by whoever builds the source (makeAuxiliarySource).
+/// Without a source (e.g. for validation), set-up throws a sentence saying what is missing.
+Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> twoStagePreconditionerFactory(
+    std::shared_ptr<AuxiliarySource> source);
+
+/// The factory's valid parameters (with defaults).
+Teuchos::RCP<const Teuchos::ParameterList> twoStageValidParameters();
+
+/// Statistics of the factory's set-ups (for tests and reports): hierarchies built and reused.
+struct TwoStageStatistics {
+  long long setups = 0, hierarchiesBuilt = 0;
+  int levels = 0;
+};
+/// The statistics of a factory made by twoStagePreconditionerFactory (zeros for another one).
+TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory);
+
+}  // namespace perinox
