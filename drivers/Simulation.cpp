@@ -809,6 +809,10 @@ struct RunFacts {
   long long matrixBytes = 0;       // sparse matrices held, all ranks
   double rssMax = 0, rssSum = 0;   // peak resident memory, MiB: the largest rank's and the sum
   std::vector<long long> detached;
+  // Wall times (rank 0's clock after barriers): the set-up (evaluator, maps, before the first
+  // solve), the solve (every load step), and one residual evaluation at the final state (median
+  // of three), the unit of the machine-independent cost ratios in docs/performance.md.
+  double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
 };
 
 /// The per-rank particle CSVs gathered into fields.csv (for plotting), the parts removed.
@@ -887,6 +891,13 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
     fragments += s.fragmentParticles;
   }
   j["newton_iterations_total"] = newtonAll;
+  const long long newtonTotal = newtonAll;
+  j["timing"] = {{"setup_s", facts.setupSeconds},
+                 {"solve_s", facts.solveSeconds},
+                 {"residual_evaluation_s", facts.residualSeconds},
+                 {"solve_in_residuals", facts.residualSeconds > 0 ? facts.solveSeconds / facts.residualSeconds : 0.0},
+                 {"newton_iteration_in_residuals",
+                  facts.residualSeconds > 0 && newtonTotal > 0 ? facts.solveSeconds / facts.residualSeconds / newtonTotal : 0.0}};
   j["linear_solves_total"] = solves;
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
@@ -1018,6 +1029,25 @@ Teuchos::RCP<PeridynamicEvaluator> buildEvaluator(const Scene& scene, const Teuc
                            split.preconditioner, scene.solver.jfnkLambda);
   }
   return evaluator;
+}
+
+/// Wall time of one residual evaluation at x (median of three, after barriers).
+double residualSeconds(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x) {
+  auto f = Thyra::createMember(ev.get_f_space());
+  std::vector<double> t;
+  for (int r = 0; r < 3; ++r) {
+    auto in = ev.createInArgs();
+    in.set_x(Teuchos::rcpFromRef(x));
+    auto out = ev.createOutArgs();
+    out.set_f(f);
+    ev.comm()->barrier();
+    const double a = now();
+    ev.evalModel(in, out);
+    ev.comm()->barrier();
+    t.push_back(now() - a);
+  }
+  std::sort(t.begin(), t.end());
+  return t[1];
 }
 
 /// Peak resident memory (the largest rank's and the sum, MiB) and the sparse matrices held.
@@ -1231,7 +1261,11 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
   });
 
+  comm->barrier();
+  const double tSolve = now();
   const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0);
+  comm->barrier();
+  const double solveSeconds = now() - tSolve;
   const auto& xConverged = solved.x;
   const double lambda = solved.loadFactor, elapsedBefore = solved.elapsedBefore;
   const int segment = solved.segment;
@@ -1248,6 +1282,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks); });
   res.wallTime = now() - t0 + elapsedBefore;
   RunFacts facts;
+  facts.setupSeconds = tSolve - t0;
+  facts.solveSeconds = solveSeconds;
+  facts.residualSeconds = residualSeconds(*evaluator, *xConverged);
   measureFootprint(*evaluator, *comm, facts);
   facts.ranks = nranks;
   facts.segment = segment;
