@@ -82,12 +82,16 @@ Teuchos::RCP<const Teuchos::ParameterList> validLinearSolverParameters() {
 
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
     const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks, const std::shared_ptr<AuxiliarySource>& auxiliary) {
-  const std::string type = params->get<std::string>("Linear Solver Type", "Belos");
-  if (type == "Amesos2" && nranks > 1)
-    throw std::invalid_argument(
-        "the direct solver (Linear Solver Type = Amesos2) runs on one MPI rank only: this "
-        "Trilinos build's KLU2 returns wrong solutions on more ranks; use the MUMPS direct "
-        "solver (preset mumps), Belos with MueLu or Ifpack2 (xml/solvers/), or run on one rank");
+  std::string type = params->get<std::string>("Linear Solver Type", "Belos");
+  if (type == "Amesos2" && nranks > 1) {
+    // This Trilinos build's KLU2 returns wrong solutions on more than one rank
+    // (docs/trilinos-notes.md): a direct solve there is MUMPS's (the preset mumps).
+    auto mumps = Teuchos::rcp(new Teuchos::ParameterList(params->name()));
+    mumps->set("Linear Solver Type", "MUMPS");
+    mumps->sublist("Linear Solver Types").sublist("MUMPS").set("Ordering", "Auto");
+    mumps->set("Preconditioner Type", "None");
+    return buildLinearSolverFactory(mumps, nranks, auxiliary);
+  }
   if (type == "Amesos" || params->get<std::string>("Preconditioner Type", "None") == "Ifpack" ||
       params->get<std::string>("Preconditioner Type", "None") == "ML")
     throw std::invalid_argument(

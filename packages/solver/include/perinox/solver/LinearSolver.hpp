@@ -18,8 +18,9 @@ class AuxiliarySource;  // TwoStagePreconditioner.hpp
 Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters();
 
 /// Builds the factory. Throws std::invalid_argument with a clear sentence when the choice is
-/// unusable here: the Amesos2 direct solver on more than one rank (this Trilinos build's
-/// KLU2 returns wrong answers in parallel), unknown solver or preconditioner names. auxiliary
+/// unusable here (unknown solver or preconditioner names, Epetra-only ones). The Amesos2 direct
+/// solver on more than one rank becomes MUMPS (this Trilinos build's KLU2 returns wrong answers
+/// in parallel). auxiliary
 /// feeds "Preconditioner Type" = "Two-Stage" (the `scalable` preset; makeAuxiliarySource in
 /// AuxiliaryOperators.hpp makes perinox's); without it that preconditioner refuses to set up.
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
