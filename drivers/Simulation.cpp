@@ -33,6 +33,7 @@
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
+#include "perinox/solver/TwoStagePreconditioner.hpp"
 #include "perinox/stepping/LoadStepper.hpp"
 #include "perinox/stepping/PeridynamicDamage.hpp"
 
@@ -813,6 +814,7 @@ struct RunFacts {
   // solve), the solve (every load step), and one residual evaluation at the final state (median
   // of three), the unit of the machine-independent cost ratios in docs/performance.md.
   double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
+  TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
 };
 
 /// The per-rank particle CSVs gathered into fields.csv (for plotting), the parts removed.
@@ -899,6 +901,11 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                  {"newton_iteration_in_residuals",
                   facts.residualSeconds > 0 && newtonTotal > 0 ? facts.solveSeconds / facts.residualSeconds / newtonTotal : 0.0}};
   j["linear_solves_total"] = solves;
+  if (facts.twoStage.setups > 0)
+    j["preconditioner"] = {{"type", "Two-Stage"},
+                           {"setups", facts.twoStage.setups},
+                           {"hierarchies_built", facts.twoStage.hierarchiesBuilt},
+                           {"levels", facts.twoStage.levels}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
   const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed
@@ -1285,6 +1292,8 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   facts.setupSeconds = tSolve - t0;
   facts.solveSeconds = solveSeconds;
   facts.residualSeconds = residualSeconds(*evaluator, *xConverged);
+  if (auto wf = evaluator->get_W_factory())
+    if (auto pf = wf->getPreconditionerFactory()) facts.twoStage = twoStageStatistics(*pf);
   measureFootprint(*evaluator, *comm, facts);
   facts.ranks = nranks;
   facts.segment = segment;
