@@ -1,12 +1,16 @@
 // piro_tension: perinox inside a Trilinos application, without a scene file.
 //
 // Sample run:  mpiexec -np 2 piro_tension [--solver <prefix>/share/perinox/xml/solvers/mumps.xml] [--output out.json]
+//              mpiexec -np 2 piro_tension --loca yes     (LOCA arc-length continuation in lambda from 0 to 1)
 //
 // Description: the displacement-driven tension block of xml/tension_block.xml is built in C++ as a
 // perinox::ProblemSpec, turned into perinox's Thyra model evaluator, and solved by Piro's NOX
-// solver in one Newton solve at load factor 1. out.json holds the mean displacement of the pulled
+// solver in one Newton solve at load factor 1, or (--loca yes) by Piro's LOCA solver: pseudo-arc-length
+// continuation in the load factor p(0) from 0 to 1 along the path. out.json holds the mean displacement of the pulled
 // end and the reaction on the pulled layer in summary.json's layout: they equal
 // `perinox run xml/tension_block.xml --set "Solver/Load Steps=1"` (tests/compare_runs.py).
+#include <LOCA_Stepper.H>
+#include <Piro_LOCASolver.hpp>
 #include <Piro_NOXSolver.hpp>
 #include <Teuchos_DefaultComm.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
@@ -20,7 +24,39 @@
 
 using namespace perinox;
 
-int run(const std::string& solverFile, const std::string& outputFile, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+/// LOCA through Piro: arc-length continuation in p(0) ("Load Factor") from the unloaded state to 1,
+/// each point corrected by NOX with the status tests above; the probes at the last point.
+int continuation(Teuchos::ParameterList& piro, const Teuchos::RCP<PeridynamicEvaluator>& evaluator, const std::vector<int>& end,
+                 const std::vector<int>& right, const std::string& outputFile) {
+  auto& stepper = piro.sublist("LOCA").sublist("Stepper");
+  stepper.set("Continuation Method", "Arc Length");
+  stepper.set("Continuation Parameter", "Load Factor");  // the evaluator's get_p_names(0)
+  stepper.set("Initial Value", 0.0);
+  stepper.set("Min Value", -1.0);  // LOCA requires both bounds (an exception without "Min Value")
+  stepper.set("Max Value", 1.0);
+  stepper.set("Max Steps", 50);
+  stepper.set("Compute Eigenvalues", false);
+  piro.sublist("LOCA").sublist("Predictor").set("Method", "Tangent");  // dx/dlambda from DfDp
+  piro.sublist("LOCA").sublist("Step Size").set("Initial Step Size", 0.05);
+  piro.sublist("LOCA").sublist("Step Size").set("Max Step Size", 0.25);
+  evaluator->setLoadFactor(0.0);  // LOCA starts from the nominal values: x = 0 at lambda = 0
+  Piro::LOCASolver<double> solver(Teuchos::rcpFromRef(piro), evaluator, Teuchos::null);
+  auto out = solver.createOutArgs();
+  auto x = Thyra::createMember(solver.get_g_space(solver.Ng() - 1));
+  out.set_g(solver.Ng() - 1, x);
+  solver.evalModel(solver.getNominalValues(), out);
+  const double lambda = solver.getStepper()->getSolutionGroup()->getParam(0);
+  evaluator->setLoadFactor(lambda);  // the diagnostics below (the reaction) at the last point
+  const int steps = solver.getStepper()->getStepNumber();
+  writeProbeSummary(outputFile, *evaluator->comm(),
+                    {{"right end", "displacement", {{lambda, evaluator->meanDisplacement(*x, end)}}},
+                     {"reaction", "reaction", {{lambda, evaluator->reactionOn(*x, right)}}}},
+                    "\"continuation_steps\": " + std::to_string(steps));
+  if (evaluator->comm()->getRank() == 0) std::cout << "LOCA: " << steps << " continuation steps to load factor " << lambda << "\n";
+  return std::abs(lambda - 1.0) <= 1e-12 ? 0 : 3;  // 3: the path did not reach load factor 1
+}
+
+int run(const std::string& solverFile, const std::string& outputFile, bool loca, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
   // 1. The problem: [0,1] x [0,0.5] m, 20 x 10 particles, fictitious layers outside both ends; rollers
   //    u_x = 0 on the left layer, u_y = 0 on its bottom rows, the pull u_x = 0.1 X on the right layer.
   LatticeSpec lattice;
@@ -40,7 +76,6 @@ int run(const std::string& solverFile, const std::string& outputFile, const Teuc
   auto linear = Teuchos::getParametersFromXmlFile(solverFile);
   validateLinearSolverList(*linear, solverFile);  // one sentence for a misspelt key, before any work
   evaluator->set_W_factory(buildLinearSolverFactory(linear, comm->getSize()));
-  evaluator->setLoadFactor(1.0);  // the parameter p(0): Piro passes on its nominal value, this one
 
   // 3. Piro's NOX solver: full Newton until |F| < 1e-12 |F(x0)| or |F| at twice its round-off scale
   //    (NOX's default |F| < 1e-8 means nothing for forces of 1e7 N).
@@ -59,6 +94,8 @@ int run(const std::string& solverFile, const std::string& outputFile, const Teuc
         <ParameterList name="Test 3"><Parameter name="Test Type" type="string" value="FiniteValue"/></ParameterList>
       </ParameterList></ParameterList></ParameterList>)");
   piro->sublist("NOX").sublist("Status Tests").sublist("Test 1").set("Tolerance", 2 * evaluator->roundoffScale());
+  if (loca) return continuation(*piro, evaluator, end, right, outputFile);
+  evaluator->setLoadFactor(1.0);  // the parameter p(0): Piro passes on its nominal value, this one
   Piro::NOXSolver<double> solver(piro, evaluator);
 
   // 4. Solve. Piro's input x is Newton's initial guess, the solution its last response. From zero the
@@ -91,17 +128,17 @@ int run(const std::string& solverFile, const std::string& outputFile, const Teuc
 int main(int argc, char** argv) {
   Tpetra::ScopeGuard mpi(&argc, &argv);  // MPI and Kokkos, as for any Tpetra program
   auto comm = Teuchos::DefaultComm<int>::getComm();
-  std::string solverFile = PERINOX_PRESETS "/mumps.xml", outputFile = "piro_tension.json";
+  std::string solverFile = PERINOX_PRESETS "/mumps.xml", outputFile = "piro_tension.json", loca = "no";
   for (int i = 1; i < argc; i += 2) {
     const std::string option = argv[i];
-    if (i + 1 == argc || (option != "--solver" && option != "--output")) {
-      if (comm->getRank() == 0) std::cerr << "usage: piro_tension [--solver STRATIMIKOS.xml] [--output FILE.json]\n";
+    if (i + 1 == argc || (option != "--solver" && option != "--output" && option != "--loca")) {
+      if (comm->getRank() == 0) std::cerr << "usage: piro_tension [--solver STRATIMIKOS.xml] [--output FILE.json] [--loca yes|no]\n";
       return 2;
     }
-    (option == "--solver" ? solverFile : outputFile) = argv[i + 1];
+    (option == "--solver" ? solverFile : option == "--output" ? outputFile : loca) = argv[i + 1];
   }
   try {
-    return run(solverFile, outputFile, comm);
+    return run(solverFile, outputFile, loca == "yes", comm);
   } catch (const std::exception& e) {  // perinox's errors are one sentence (a bad problem, a bad list)
     if (comm->getRank() == 0) std::cerr << "piro_tension: " << e.what() << "\n";
     return 1;
