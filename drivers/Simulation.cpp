@@ -29,11 +29,11 @@
 #include "perinox/io/OutputFolder.hpp"
 #include "perinox/solver/AdrSolver.hpp"
 #include "perinox/solver/AuxiliaryOperators.hpp"
-#include "perinox/solver/ArcLength.hpp"
 #include "perinox/solver/LinearSolver.hpp"
 #include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/NewtonSolver.hpp"
 #include "perinox/solver/TwoStagePreconditioner.hpp"
+#include "perinox/stepping/ArcLengthStepper.hpp"
 #include "perinox/stepping/LoadStepper.hpp"
 #include "perinox/stepping/PeridynamicDamage.hpp"
 
@@ -487,201 +487,6 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   return c;
 }
 
-/// Pseudo-arc-length continuation from the converged state (xConv, lambda): secant predictor
-/// (the first step along the tangent J z = f_ext-like -df/dlambda), Riks corrector, the arc
-/// halved on failure and grown after easy steps. Fills res (steps, probes, path, limit points);
-/// returns false with res.failure set when a step fails for good.
-bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& ev,
-                           Thyra::VectorBase<double>& xConv, double& lambda, RunResult& res, bool quiet, int rank) {
-  const auto& A = scene.solver.arc;
-  ArcLengthOptions ao;
-  ao.tolerance = scene.solver.tolerance;
-  ao.maxIterations = scene.solver.maxIterations;
-  ao.floorFactor = scene.solver.floorFactor;
-  ArcLengthSolver als(ev, ao);
-  int deflProbe = -1;
-  for (std::size_t k = 0; k < scene.probes.size(); ++k)
-    if (scene.probes[k].name == A.deflectionProbe) deflProbe = static_cast<int>(k);
-
-  auto tx = xConv.clone_v();
-  const std::string why = als.tangent(xConv, lambda, *tx);
-  if (!why.empty()) {
-    res.failure = "the initial tangent of the path could not be computed: " + why;
-    return false;
-  }
-  const double zn = Thyra::norm_2(*tx);
-  // Metric weight: with w = 1 / |dx/dlambda|^2 at the start, displacement and load factor
-  // contribute equally to the first arc.
-  const double w = zn > 0 ? 1.0 / (zn * zn) : 1.0;
-  double tl = 1.0;
-  auto normalise = [&](Thyra::VectorBase<double>& v, double& l) {
-    const double n = std::sqrt(w * Thyra::dot(v, v) + l * l);
-    Thyra::scale(1.0 / n, Teuchos::ptrFromRef(v));
-    l /= n;
-  };
-  normalise(*tx, tl);
-  auto x = xConv.clone_v(), xPred = xConv.clone_v();
-  double ds = A.initial;
-  std::vector<double> defl;  // deflection of every converged point, starting with the initial one
-  auto deflection = [&](const Thyra::VectorBase<double>& state) {
-    if (deflProbe < 0) return 0.0;
-    const auto u = ev->ownedDisplacements(state);
-    return probeValue(*ev, scene.probes[deflProbe], state, u)[A.deflectionComponent];
-  };
-  defl.push_back(deflection(xConv));
-  std::vector<double> lambdas{lambda};
-  int step = 0;
-  for (;;) {
-    // At the target (a step lands on it to 1e-9, relative) or past it.
-    if (lambda >= A.targetLoadFactor * (1 - 1e-9)) return true;
-    if (A.targetDeflection > 0 && std::abs(defl.back()) >= A.targetDeflection * (1 - 1e-9)) return true;
-    if (step >= A.maxSteps) {
-      std::ostringstream s;
-      s << "reached 'Solver/Arc Length/Max Steps' = " << A.maxSteps << " at load factor " << lambda
-        << " before the target (load factor " << A.targetLoadFactor;
-      if (A.targetDeflection > 0) s << " or deflection " << A.targetDeflection;
-      s << ")";
-      res.failure = s.str();
-      return false;
-    }
-    ++step;
-    const double tStep = now();
-    const LinearSolveCounts before = als.totalLinear();
-    const long long correctorsBefore = als.totalCorrectorIterations();
-    StepRecord rec;
-    rec.step = step;
-    ArcLengthResult r;
-    int cut = 0;
-    double l = lambda;
-    for (;;) {
-      // Predictor: (xConv, lambda) + ds (tx, tl).
-      Thyra::V_StVpStV(x.ptr(), 1.0, xConv, ds, *tx);
-      l = lambda + ds * tl;
-      Thyra::copy(*x, xPred.ptr());
-      const double lPred = l;
-      r = als.correct(*x, l, *tx, tl, w, *xPred, lPred);
-      if (r.converged) break;
-      if (cut >= scene.solver.maxCutbacks) break;
-      if (0.5 * ds < A.minimum) {
-        r.failure += "; the arc length would fall below 'Solver/Arc Length/Min Arc Length'";
-        break;
-      }
-      ++cut;
-      ds *= 0.5;
-      if (rank == 0 && !quiet)
-        std::cout << "  step " << step << ": " << r.failure << "; cutting the arc length to " << ds << "\n";
-    }
-    // Land on the target rather than pass it: when a converged step crosses the target load
-    // factor (or deflection), shorten its arc by secant iteration on the arc length and redo it
-    // from the same start, until its end is within 1e-9 (relative) of the target. If a shortened
-    // step fails to converge, the crossing step is kept.
-    if (r.converged) {
-      const double dTarget = A.targetDeflection;
-      bool byLoad = false;  // the load factor crosses its target (else the deflection)
-      auto crossing = [&](double lNew, double& g0, double& g1, double& target) {
-        if (lambda < A.targetLoadFactor && lNew > A.targetLoadFactor) {
-          g0 = lambda, g1 = lNew, target = A.targetLoadFactor, byLoad = true;
-          return true;
-        }
-        if (dTarget > 0 && std::abs(defl.back()) < dTarget) {
-          const double dn = std::abs(deflection(*x));
-          if (dn > dTarget) {
-            g0 = std::abs(defl.back()), g1 = dn, target = dTarget;
-            return true;
-          }
-        }
-        return false;
-      };
-      double g0 = 0, g1 = 0, target = 0;
-      if (crossing(l, g0, g1, target)) {
-        auto xCross = x->clone_v();
-        const double lCross = l, dsCross = ds;
-        const ArcLengthResult rCross = r;
-        double sA = 0, gA = g0, sB = ds, gB = g1;
-        bool landed = false;
-        for (int k = 0; k < 10 && !landed; ++k) {
-          const double sNew = sB + (target - gB) * (sB - sA) / (gB - gA);
-          if (!(sNew > 0) || !(sNew < dsCross)) break;
-          ds = sNew;
-          Thyra::V_StVpStV(x.ptr(), 1.0, xConv, ds, *tx);
-          l = lambda + ds * tl;
-          Thyra::copy(*x, xPred.ptr());
-          r = als.correct(*x, l, *tx, tl, w, *xPred, l);
-          if (!r.converged) break;
-          const double gNew = byLoad ? l : std::abs(deflection(*x));
-          sA = sB, gA = gB, sB = ds, gB = gNew;
-          landed = std::abs(gNew - target) <= 1e-9 * std::abs(target);
-        }
-        if (!r.converged || !landed) {  // keep the crossing step
-          Thyra::copy(*xCross, x.ptr());
-          l = lCross, ds = dsCross, r = rCross;
-        } else if (rank == 0 && !quiet) {
-          std::cout << "  step " << step << ": arc shortened from " << dsCross << " to " << ds << " to land on the target\n";
-        }
-      }
-    }
-    rec.cutbacks = cut;
-    rec.loadFactor = l;
-    rec.arcLength = ds;
-    rec.newtonIterations = r.iterations;
-    rec.linearSolves = als.totalLinear().solves - before.solves;
-    rec.krylovIterations = als.totalLinear().krylovIterations - before.krylovIterations;
-    rec.linearFailures = als.totalLinear().failures - before.failures;
-    rec.newtonIterationsAll = als.totalCorrectorIterations() - correctorsBefore;
-    rec.residuals = r.residuals;
-    rec.reactionNormalised = r.reactionNormalised;
-    rec.atRoundoffFloor = r.atRoundoffFloor;
-    rec.floor = r.floorNormalised;
-    if (!r.converged) {
-      rec.elapsed = now() - tStep;
-      res.steps.push_back(rec);
-      std::ostringstream s;
-      s << "arc-length step " << step << " (from load factor " << lambda << ") failed after " << cut
-        << " cut-back(s): " << r.failure;
-      res.failure = s.str();
-      ev->setLoadFactor(lambda);
-      return false;
-    }
-    // Secant direction for the next predictor: it continues through limit points, where the
-    // load factor turns back, without any sign decision.
-    Thyra::V_VmV(tx.ptr(), *x, xConv);
-    tl = l - lambda;
-    normalise(*tx, tl);
-    Thyra::copy(*x, Teuchos::ptrFromRef(xConv));
-    lambda = l;
-    ev->setLoadFactor(lambda);
-    if (scene.solver.stabilityCheck) rec.negativePivots = ev->negativePivots(xConv);
-    rec.elapsed = now() - tStep;
-    res.steps.push_back(rec);
-    res.pathLoadFactors.push_back(lambda);
-    const auto u = ev->ownedDisplacements(xConv);
-    for (std::size_t k = 0; k < scene.probes.size(); ++k)
-      if (scene.probes[k].quantity != "Profile")
-        res.probes[k].second.push_back({lambda, probeValue(*ev, scene.probes[k], xConv, u)});
-    defl.push_back(deflection(xConv));
-    lambdas.push_back(lambda);
-    const std::size_t n = lambdas.size();
-    if (n >= 3 && lambdas[n - 2] > lambdas[n - 3] && lambdas[n - 1] < lambdas[n - 2]) {
-      res.limitPoints.push_back({step - 1, lambdas[n - 2], defl[n - 2]});
-      if (rank == 0 && !quiet) {
-        CoutFormat keep;
-        std::cout << std::setprecision(10) << "  limit point passed: the load factor peaked at " << lambdas[n - 2] << " (step " << step - 1
-                  << ", deflection " << defl[n - 2] << ") and now decreases\n";
-      }
-    }
-    if (rank == 0 && !quiet) {
-      CoutFormat keep;
-      std::cout << "step " << std::setw(3) << step << "  load " << std::fixed << std::setprecision(6) << lambda
-                << "  arc " << std::scientific << std::setprecision(3) << ds << "  corrector " << std::setw(2)
-                << r.iterations << "  residual " << r.residuals.back()
-                << (deflProbe >= 0 ? "  deflection " : "") << (deflProbe >= 0 ? std::to_string(defl.back()) : "")
-                << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
-                << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::endl;
-    }
-    if (r.iterations <= scene.solver.easyIterations) ds = std::min(A.maximum, 1.5 * ds);
-  }
-}
-
 /// The scene's probes, recorded at every accepted step (collective: every rank).
 class ProbeRecorder final : public StepObserver {
  public:
@@ -1069,6 +874,76 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
 }
 
 /// The solve's outcome: the last converged state and its load factor.
+/// The arc-length console: one line per converged point (load factor, arc, corrector iterations,
+/// residual, deflection, negative pivots, time) and the stepper's notes, on rank 0 unless quiet.
+class ArcConsole final : public StepObserver {
+ public:
+  ArcConsole(const ArcLengthStepper& arc, bool deflection, bool speak) : arc_(arc), deflection_(deflection), speak_(speak) {}
+  void note(const std::string& line) override {
+    if (speak_) std::cout << line << "\n";
+  }
+  void accepted(const StepInfo& s) override {
+    if (!speak_) return;
+    CoutFormat keep;
+    const auto& rec = s.record;
+    std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(6) << s.loadFactor
+              << "  arc " << std::scientific << std::setprecision(3) << rec.arcLength << "  corrector " << std::setw(2)
+              << s.result.iterations << "  residual " << s.result.residuals.back()
+              << (deflection_ ? "  deflection " + std::to_string(arc_.monitorHistory().back()) : std::string())
+              << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
+              << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::endl;
+  }
+
+ private:
+  const ArcLengthStepper& arc_;
+  bool deflection_, speak_;
+};
+
+/// 'Solver/Continuation = Arc Length': the stepping layer's ArcLengthStepper over the load-factor
+/// model from the unloaded state (x, lambda), with the scene's deflection probe as its monitor, the
+/// stability check as its pivot count, and the probes and the console as observers. Fills res
+/// (steps, path, limit points, failure); x and lambda receive the last converged point.
+bool arcLengthContinuation(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& ev,
+                           const Teuchos::RCP<LoadFactorModel>& model, StepObserver& probes, Thyra::VectorBase<double>& x,
+                           double& lambda, RunResult& res, bool quiet, int rank) {
+  const auto& A = scene.solver.arc;
+  ArcLengthStepperOptions ao;
+  ao.initialArcLength = A.initial;
+  ao.minArcLength = A.minimum;
+  ao.maxArcLength = A.maximum;
+  ao.maxSteps = A.maxSteps;
+  ao.targetLoadFactor = A.targetLoadFactor;
+  ao.targetMonitor = A.targetDeflection;
+  ao.maxCutbacks = scene.solver.maxCutbacks;
+  ao.easyIterations = scene.solver.easyIterations;
+  ao.tolerance = scene.solver.tolerance;
+  ao.maxIterations = scene.solver.maxIterations;
+  ao.floorFactor = scene.solver.floorFactor;
+  ao.keyPrefix = "Solver/Arc Length/";
+  ao.monitorName = "deflection";
+  ArcLengthStepper arc(model, Teuchos::rcp(new EvaluatorResidualScale(ev)), ao);
+  int deflProbe = -1;
+  for (std::size_t k = 0; k < scene.probes.size(); ++k)
+    if (scene.probes[k].name == A.deflectionProbe) deflProbe = static_cast<int>(k);
+  if (deflProbe >= 0)
+    arc.setMonitor([&, deflProbe](const Thyra::VectorBase<double>& state) {
+      const auto u = ev->ownedDisplacements(state);
+      return probeValue(*ev, scene.probes[deflProbe], state, u)[A.deflectionComponent];
+    });
+  if (scene.solver.stabilityCheck) arc.setStabilityCount([&](const Thyra::VectorBase<double>& s) { return ev->negativePivots(s); });
+  ArcConsole console(arc, deflProbe >= 0, rank == 0 && !quiet);
+  arc.addObserver(&probes);
+  arc.addObserver(&console);
+  const bool ok = arc.run(x, lambda);
+  res.steps = arc.records();
+  res.pathLoadFactors = arc.path();
+  res.failure = arc.failure();
+  for (const auto& lp : arc.limitPoints()) res.limitPoints.push_back({lp.step, lp.loadFactor, lp.monitor});
+  Thyra::copy(arc.converged(), Teuchos::ptrFromRef(x));
+  lambda = arc.loadFactor();
+  return ok;
+}
+
 struct Solved {
   Teuchos::RCP<Thyra::VectorBase<double>> x;
   double loadFactor = 0.0;
@@ -1197,7 +1072,7 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
   out.segment = segment;
   if (scene.solver.continuation == "Arc Length") {
     Thyra::assign(out.x.ptr(), 0.0);
-    out.converged = arcLengthContinuation(scene, evaluator, *out.x, out.loadFactor, res, options.quiet, rank);
+    out.converged = arcLengthContinuation(scene, evaluator, model, probes, *out.x, out.loadFactor, res, options.quiet, rank);
   } else {
     out.converged = stepper.run();
     res.steps = stepper.records();

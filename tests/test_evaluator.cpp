@@ -263,6 +263,87 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
   EXPECT_NO_THROW(PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, true)));
 }
 
+// The stabilisation's micromodulus is the library's: a ProblemSpec that sets only G gets
+// C = 12 k' / (pi t delta^4) (plane strain, k' = E / (2 (1 - nu - 2 nu^2)); Silling 2017), and the
+// same residual, bit for bit, as one that gives that C by hand. A C out of range, and a bad G, are
+// refused with one sentence.
+TEST(ProblemValidation, StabilizationConstantIsComputedByTheLibrary) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  auto given = makeProblem(2, 3.015, 0.1, false);  // C = micromodulusC(...), set by hand
+  auto computed = std::make_shared<ProblemSpec>(*given);
+  computed->stab = StabilizationSpec{};
+  computed->stab.G = 0.1;
+  const auto& m = given->material;
+  const double kp = m.E / (2.0 * (1.0 - m.nu - 2.0 * m.nu * m.nu));
+  const double closed = 12.0 * kp / (3.14159265358979323846 * given->disc.thickness * std::pow(given->disc.horizon, 4));
+  EXPECT_NEAR(computed->stabilizationSpec().C, closed, 1e-12 * closed);
+  EXPECT_EQ(given->stabilizationSpec().C, given->stab.C);  // a given C is kept
+  auto residual = [&](const std::shared_ptr<ProblemSpec>& P) {
+    auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, P));
+    ev->setLoadFactor(0.7);
+    auto x = Thyra::createMember(ev->get_x_space()), f = Thyra::createMember(ev->get_x_space());
+    fill(*x, 1, 0.03);
+    auto in = ev->createInArgs();
+    in.set_x(x);
+    auto out = ev->createOutArgs();
+    out.set_f(f);
+    ev->evalModel(in, out);
+    return ev->ownedFreeValues(*f);
+  };
+  EXPECT_EQ(residual(computed), residual(given));
+  auto expectRefused = [&](const std::shared_ptr<ProblemSpec>& P, const std::string& part) {
+    try {
+      PeridynamicEvaluator ev(comm, P);
+      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  };
+  auto negative = std::make_shared<ProblemSpec>(*computed);
+  negative->stab.C = -3.0;
+  expectRefused(negative, "ProblemSpec: stab.C = -3 must be finite and >= 0, or left at its default");
+  auto badG = std::make_shared<ProblemSpec>(*computed);
+  badG->stab.G = std::nan("");
+  expectRefused(badG, "stab.G = nan must be finite and >= 0");
+}
+
+// The evaluator's own options (getValidParameters): the list picks the Jacobian mode, and a
+// misspelt key or an unknown mode is refused with one sentence naming it.
+TEST(EvaluatorOptions, ValidatedListSelectsTheJacobian) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, false)));
+  const auto valid = PeridynamicEvaluator::getValidParameters();
+  EXPECT_EQ(valid->get<std::string>("Jacobian"), "Assembled");
+  Teuchos::ParameterList mf;
+  mf.set("Jacobian", "Matrix-Free");
+  ev->setJacobian(mf, Teuchos::null);
+  EXPECT_EQ(ev->jacobianMode(), JacobianMode::MatrixFree);
+  Teuchos::ParameterList jf;
+  jf.set("Jacobian", "Jacobian-Free");
+  jf.set("Jacobian-Free Lambda", 1e-7);
+  ev->setJacobian(jf, Teuchos::null);
+  EXPECT_EQ(ev->jacobianMode(), JacobianMode::JacobianFree);
+  auto refused = [&](const Teuchos::ParameterList& l, const std::string& part) {
+    try {
+      ev->setJacobian(l, Teuchos::null);
+      ADD_FAILURE() << "accepted; expected " << part;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  };
+  Teuchos::ParameterList typo;
+  typo.set("Jacobain", "Assembled");
+  refused(typo, "Jacobain");
+  Teuchos::ParameterList mode;
+  mode.set("Jacobian", "Free");
+  refused(mode, "Free");
+  Teuchos::ParameterList fd;
+  fd.set("Jacobian-Free Lambda", -1.0);
+  refused(fd, "'Jacobian-Free Lambda' must be positive");
+}
+
 // The load factor as the model parameter p(0): an evaluation given p(0) = lambda equals one at
 // setLoadFactor(lambda), and DfDp(0) passes a Taylor test in lambda: the remainder
 // |f(lambda + h) - f(lambda) - h DfDp| falls like h^2 with prescribed displacements (a smooth, nonlinear

@@ -33,6 +33,36 @@ void positive(double v, const char* name) {
 
 }  // namespace
 
+StabilizationSpec ProblemSpec::stabilizationSpec() const {
+  StabilizationSpec s = stab;
+  if (s.C == StabilizationSpec::kFromMaterial) s.C = micromodulusC(material, disc.horizon, disc.thickness);
+  return s;
+}
+
+std::shared_ptr<ProblemSpec> problemOnLattice(const LatticeSpec& lattice, const MaterialSpec& material) {
+  auto P = std::make_shared<ProblemSpec>();
+  P->disc = buildLattice(lattice);
+  P->material = material;
+  const std::size_t n = static_cast<std::size_t>(P->disc.size()), D = static_cast<std::size_t>(P->disc.dim);
+  P->fixedMask.assign(n, 0);
+  P->prescribed.assign(n * D, 0.0);
+  P->bodyForce.assign(n * D, 0.0);
+  return P;
+}
+
+void prescribe(ProblemSpec& P, const std::vector<int>& particles, int c, const std::function<double(const Vec3&)>& value) {
+  if (c < 0 || c >= P.dim()) throw std::invalid_argument("ProblemSpec: prescribe: component " + std::to_string(c) + " is not one of this " + std::to_string(P.dim()) + "D problem's");
+  for (int p : particles) {
+    if (p < 0 || p >= P.disc.size()) throw std::invalid_argument("ProblemSpec: prescribe: particle " + std::to_string(p) + " does not exist");
+    P.fixedMask[p] |= static_cast<std::uint8_t>(1u << c);
+    P.prescribed[static_cast<std::size_t>(p) * P.dim() + c] = value(P.disc.X[p]);
+  }
+}
+
+void prescribe(ProblemSpec& P, const std::vector<int>& particles, int c, double value) {
+  prescribe(P, particles, c, [value](const Vec3&) { return value; });
+}
+
 bool preventsRigidMotion(const ProblemSpec& P) {
   const Discretization& d = P.disc;
   const int dim = d.dim;
@@ -91,7 +121,8 @@ void validateProblem(const ProblemSpec& P) {
     if (!(s > 0)) refuse("modulusScale holds " + number(s) + "; every E_i / E must be positive");
   if (P.stabilization) {
     if (!(P.stab.G >= 0) || !std::isfinite(P.stab.G)) refuse("stab.G = " + number(P.stab.G) + " must be finite and >= 0");
-    if (!std::isfinite(P.stab.C) || P.stab.C < 0) refuse("stab.C = " + number(P.stab.C) + " must be finite and >= 0 (micromodulusC gives it)");
+    if (P.stab.C != StabilizationSpec::kFromMaterial && (!std::isfinite(P.stab.C) || P.stab.C < 0))
+      refuse("stab.C = " + number(P.stab.C) + " must be finite and >= 0, or left at its default (then micromodulusC of the material, horizon and thickness gives it)");
   }
   if (P.control && (!std::isfinite(P.controlSpec.C) || P.controlSpec.C < 0))
     refuse("controlSpec.C = " + number(P.controlSpec.C) + " must be finite and >= 0");

@@ -1,4 +1,5 @@
 #include "Effects.hpp"
+#include "Kinematics.hpp"
 
 #include <sstream>
 
@@ -123,15 +124,14 @@ void StressPointEffect<D>::addDirectional(BondWork<D>& w) const {
     Mat K = Mat::Zero(), FK = Mat::Zero(), dFK = Mat::Zero();
     for (int l = 0; l < w.m; ++l) {
       if (grp[l] != p) continue;
-      K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
-      FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
-      dFK.noalias() += w.Vj[l] * w.dY[l] * w.xi[l].transpose();
+      kinematics::addBond(K, FK, w.Vj[l], w.xi[l], w.Y[l]);
+      kinematics::addToDeformationSum(dFK, w.Vj[l], w.dY[l], w.xi[l]);
     }
     const Mat Kinv = K.inverse();
     Mat P;
     TangentD<D> A;
-    piola<D>(material_, FK * Kinv, sc, true, w.i, P, A);
-    const Mat dP = contract<D>(A, dFK * Kinv);
+    piola<D>(material_, kinematics::deformationGradient(FK, Kinv), sc, true, w.i, P, A);
+    const Mat dP = contract<D>(A, kinematics::deformationGradient(dFK, Kinv));
     for (int l = 0; l < w.m; ++l) {
       if (grp[l] != p) continue;
       const auto h = (Kinv * w.xi[l]).eval();
@@ -232,8 +232,7 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
     Mat K = Mat::Zero(), FK = Mat::Zero();
     for (int l = 0; l < w.m; ++l) {
       if (!in(l)) continue;
-      K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
-      FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
+      kinematics::addBond(K, FK, w.Vj[l], w.xi[l], w.Y[l]);
     }
     const Mat Kinv = K.inverse();
     Vec gsum = Vec::Zero();
@@ -244,7 +243,7 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
       }
     Mat P;
     TangentD<D> A;
-    piola<D>(material_, FK * Kinv, sc, tangent, w.i, P, A);
+    piola<D>(material_, kinematics::deformationGradient(FK, Kinv), sc, tangent, w.i, P, A);
     addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, h, gsum, in);
   }
 }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "Effects.hpp"
+#include "Kinematics.hpp"
 
 namespace perinox {
 
@@ -129,7 +130,7 @@ struct ImplD final : Model::Impl {
       for (int l = 0; l < w.m; ++l) {
         const int j = w.nbr[l];
         for (int a = 0; a < D; ++a) w.dY[l][a] = v[j * D + a] - v[i * D + a];
-        w.dF.noalias() += w.Vj[l] * w.dY[l] * w.h[l].transpose();
+        kinematics::addToDeformationSum(w.dF, w.Vj[l], w.dY[l], w.h[l]);  // dF = sum V dY (x) K^-1 xi
       }
       try {
         for (std::size_t e = 0; e < effects.size(); ++e) {
@@ -193,11 +194,10 @@ struct ImplD final : Model::Impl {
         w.Y[l][a] = w.xi[l][a] + u[j * D + a] - ui[a];
       }
       w.Vj[l] = p.volume[j];
-      w.K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
-      FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
+      kinematics::addBond(w.K, FK, w.Vj[l], w.xi[l], w.Y[l]);
     }
     w.Kinv = w.K.inverse();
-    w.F = FK * w.Kinv;
+    w.F = kinematics::deformationGradient(FK, w.Kinv);
     w.gsum.setZero();
     for (int l = 0; l < w.m; ++l) {
       w.h[l] = w.Kinv * w.xi[l];
@@ -295,11 +295,10 @@ struct ImplD final : Model::Impl {
           double v = 0;
           for (int l = 0; l < w.m; ++l) {
             if (grp[l] != g) continue;
-            K.noalias() += w.Vj[l] * w.xi[l] * w.xi[l].transpose();
-            FK.noalias() += w.Vj[l] * w.Y[l] * w.xi[l].transpose();
+            kinematics::addBond(K, FK, w.Vj[l], w.xi[l], w.Y[l]);
             v += w.Vj[l];
           }
-          const Mat Fp = FK * K.inverse();
+          const Mat Fp = kinematics::deformationGradient<Mat>(FK, K.inverse());
           Eigen::Matrix3d sp3;
           const bool ok = model.material().template cauchy<D>(Fp, sp3);
           valid = valid && ok;
@@ -374,7 +373,7 @@ double Model::bondStretch(const std::vector<double>& u, int i, int j) const {
     ly2 += y * y;
     lx2 += xi * xi;
   }
-  return (std::sqrt(ly2) - std::sqrt(lx2)) / std::sqrt(lx2);
+  return kinematics::stretch(lx2, ly2);
 }
 
 double Model::maxIntactStretch(const std::vector<double>& u) const {
@@ -432,7 +431,7 @@ std::vector<double> Model::unitStressForceScale() const {
     for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q) {
       const int j = particles_.famIndex[q];
       const Eigen::VectorXd xi = (particles_.X[j] - particles_.X[i]).head(D);
-      K += particles_.volume[j] * xi * xi.transpose();
+      kinematics::addToShapeTensor(K, particles_.volume[j], xi);
     }
     if (particles_.famOffset[i + 1] == particles_.famOffset[i]) continue;
     const Eigen::MatrixXd Kinv = K.inverse();
@@ -460,7 +459,12 @@ std::vector<double> Model::damageIndex() const {
 Model::~Model() = default;
 
 void Model::enableCorrespondence() { impl_->add(material_, true, nullptr); impl_->prepare(particles_); }
-void Model::enableStabilization(const StabilizationSpec& s) { impl_->add(material_, false, &s); impl_->prepare(particles_); }
+void Model::enableStabilization(const StabilizationSpec& s) {
+  if (!(s.C >= 0) || !std::isfinite(s.C))
+    throw std::invalid_argument("the stabilisation needs a micromodulus C >= 0 (micromodulusC, or ProblemSpec::stabilizationSpec)");
+  impl_->add(material_, false, &s);
+  impl_->prepare(particles_);
+}
 std::vector<std::string> Model::effectNames() const { return impl_->names(); }
 
 void Model::evaluate(const std::vector<double>& u, ElementSink& sink, bool wantTangent) const {
@@ -484,7 +488,7 @@ bool Model::shapeTensorInvertible(int i) const {
   for (auto p = particles_.famOffset[i]; p < particles_.famOffset[i + 1]; ++p) {
     const int j = particles_.famIndex[p];
     Eigen::Vector3d xi = particles_.X[j] - particles_.X[i];
-    K += particles_.volume[j] * xi * xi.transpose();
+    kinematics::addToShapeTensor(K, particles_.volume[j], xi);
     scale += particles_.volume[j] * xi.squaredNorm();
   }
   if (!(scale > 0)) return false;

@@ -157,6 +157,19 @@ std::string linearSolverFailure(const std::exception& e) {
   return "linear solver error: " + reason;
 }
 
+NewtonStatusTests newtonStatusTests(Teuchos::RCP<const ResidualScale> scale, double tolerance, int maxIterations,
+                                    double floorFactor, int stagnationStop) {
+  NewtonStatusTests t;
+  t.residual = Teuchos::rcp(new NormalizedResidualTest(std::move(scale), tolerance, floorFactor, stagnationStop));
+  t.maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(maxIterations));
+  t.finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
+  t.combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
+  t.combo->addStatusTest(t.finite);
+  t.combo->addStatusTest(t.residual);
+  t.combo->addStatusTest(t.maxIters);
+  return t;
+}
+
 NewtonSolver::NewtonSolver(Teuchos::RCP<const Thyra::ModelEvaluator<double>> model,
                            Teuchos::RCP<const ResidualScale> scale, const NewtonOptions& options)
     : model_(std::move(model)), scale_(std::move(scale)), options_(options) {}
@@ -192,14 +205,12 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   NOX::Thyra::Vector guess(x0);
   Teuchos::RCP<CountingGroup> group;
 
-  auto residualTest =
-      Teuchos::rcp(new NormalizedResidualTest(scale_, options_.tolerance, options_.floorFactor, options_.stagnationStop));
-  auto maxIters = Teuchos::rcp(new NOX::StatusTest::MaxIters(options_.maxIterations));
-  auto finite = Teuchos::rcp(new NOX::StatusTest::FiniteValue);
-  auto combo = Teuchos::rcp(new NOX::StatusTest::Combo(NOX::StatusTest::Combo::OR));
-  combo->addStatusTest(finite);
-  combo->addStatusTest(residualTest);
-  combo->addStatusTest(maxIters);
+  const NewtonStatusTests tests =
+      newtonStatusTests(scale_, options_.tolerance, options_.maxIterations, options_.floorFactor, options_.stagnationStop);
+  const auto& residualTest = tests.residual;
+  const auto& maxIters = tests.maxIters;
+  const auto& finite = tests.finite;
+  const auto& combo = tests.combo;
 
   NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
   try {

@@ -3,31 +3,22 @@
 //   x = free displacement DOFs of the particles this rank owns,
 //   f(x) = f_int(u(x, lambda)) - lambda f_ext,   W = df/dx assembled (symmetric where the physics is).
 // Prescribed DOFs (fictitious layers, pins, rollers) are not unknowns; their values are
-// lambda * prescribed. Ghost displacements arrive through a Tpetra Import; element residuals
-// and tangents of owned particles are summed into an overlapping vector / matrix and moved to
-// their owners with an Export (ADD).
+// lambda * prescribed. This class is the Thyra adapter: the DOF maps, graphs and assembly are in
+// Assembly.hpp (DofMaps, Assembler), the matrix-free operators in JacobianOperators.hpp, the
+// damage state in DamageBookkeeping.hpp.
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
 #include <Thyra_PreconditionerFactoryBase.hpp>
 #include <Thyra_StateFuncModelEvaluatorBase.hpp>
-#include <Tpetra_CrsMatrix.hpp>
-#include <Tpetra_Export.hpp>
-#include <Tpetra_Import.hpp>
-#include <Tpetra_Map.hpp>
-#include <Tpetra_Vector.hpp>
+#include <Teuchos_ParameterList.hpp>
 #include <memory>
 
+#include "perinox/evaluator/Assembly.hpp"
+#include "perinox/evaluator/DamageBookkeeping.hpp"
 #include "perinox/evaluator/Problem.hpp"
 
 namespace perinox {
-
-using LO = int;
-using GO = long long;
-using TMap = Tpetra::Map<LO, GO>;
-using TVector = Tpetra::Vector<double, LO, GO>;
-using TCrsGraph = Tpetra::CrsGraph<LO, GO>;
-using TCrsMatrix = Tpetra::CrsMatrix<double, LO, GO>;
 
 /// How the Newton solver gets W = df/dx: an assembled sparse matrix; the analytic matrix-free
 /// product (linearised kernels, nothing assembled); or finite differences of f (Jacobian-free,
@@ -36,9 +27,6 @@ enum class JacobianMode { Assembled, MatrixFree, JacobianFree };
 /// The matrix a matrix-free solve's preconditioner is built from: the assembled Jacobian, or its
 /// part that couples particles within one horizon (memory proportional to the family size).
 enum class PreconditionerMatrix { Assembled, Neighbours };
-
-class JacobianOperator;
-class DifferenceJacobianOperator;
 
 class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
  public:
@@ -73,6 +61,12 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// given the rigid-body modes as near-null space. Call before the first evaluation.
   void setJacobian(JacobianMode mode, PreconditionerMatrix pm,
                    Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory, double fdLambda = 1e-6);
+  /// The evaluator's own options, as a list: "Jacobian" (Assembled, Matrix-Free, Jacobian-Free),
+  /// "Preconditioner Matrix" (Assembled, Neighbours), "Jacobian-Free Lambda" (> 0). Everything
+  /// else (the linear solver, the preconditioner) is injected as a Stratimikos factory.
+  static Teuchos::RCP<const Teuchos::ParameterList> getValidParameters();
+  /// setJacobian from such a list (validated: std::invalid_argument, one sentence naming the key).
+  void setJacobian(const Teuchos::ParameterList& options, Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory);
   JacobianMode jacobianMode() const { return mode_; }
   Teuchos::RCP<Thyra::PreconditionerBase<double>> create_W_prec() const override;
   /// W at x assembled, whatever the Jacobian mode (for diagnostics, the explicit solver, and
@@ -104,6 +98,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// The reaction force (sum of internal forces over prescribed DOFs of the given particles),
   /// global, per component.
   std::vector<double> reactionOn(const Thyra::VectorBase<double>& x, const std::vector<int>& particles) const;
+  /// The mean displacement of the given particles (global ids, any rank), per component (global).
+  std::vector<double> meanDisplacement(const Thyra::VectorBase<double>& x, const std::vector<int>& particles) const;
 
   // --- stability ---
   /// Number of negative pivots of the tangent at x (its inertia, by Sylvester's law), from a
@@ -112,11 +108,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   int negativePivots(const Thyra::VectorBase<double>& x) const;
 
   // --- damage (seed 000 Fig. 8) ---
-  struct BreakReport {
-    long long brokenBonds = 0;             // bonds broken now (global)
-    std::vector<long long> detached;       // particles detached now (global ids, all ranks)
-    long long fragmentParticles = 0;       // of those, in free-floating fragments
-  };
+  using BreakReport = perinox::BreakReport;
   /// After a converged step: breaks every bond with s >= s_cr at x, then detaches (isolates
   /// and freezes) every particle left with a singular shape tensor, repeating until none is,
   /// and every particle of a free-floating fragment (cut off from all prescribed DOFs).
@@ -142,68 +134,31 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
                      const std::vector<std::pair<long long, double>>& frozen);
   /// Damage index of the owned particles.
   std::vector<double> ownedDamage() const { return model_->damageIndex(); }
-  const std::vector<long long>& detachedParticles() const { return detachedAll_; }
+  const std::vector<long long>& detachedParticles() const { return damage_->detached(); }
 
   const ProblemSpec& problem() const { return *problem_; }
   const Model& model() const { return *model_; }
   long long firstOwned() const { return begin_; }
   long long endOwned() const { return end_; }
-  long long numFreeDofs() const { return numFree_; }
-  Teuchos::RCP<const TMap> ownedFreeMap() const { return ownedFree_; }
+  long long numFreeDofs() const { return dofs_.numFree; }
+  Teuchos::RCP<const TMap> ownedFreeMap() const { return dofs_.ownedFree; }
   Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
   /// Global free DOF id of (particle, component), or -1 if prescribed.
-  long long freeDof(long long p, int c) const { return freeId_[p * problem_->dim() + c]; }
+  long long freeDof(long long p, int c) const { return dofs_.freeId[p * problem_->dim() + c]; }
 
  private:
-  void detachSingular(const Thyra::VectorBase<double>& x, BreakReport& rep);
-  /// Attached particles (global ids, all ranks) that no chain of intact bonds connects to a
-  /// particle with a prescribed DOF: free-floating fragments.
-  std::vector<long long> unanchoredParticles() const;
-  /// The union over all ranks of particle global ids, sorted (every rank gets the same list).
-  std::vector<long long> onAnyRank(const std::vector<long long>& mine) const;
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
   void evalModelImpl(const Thyra::ModelEvaluatorBase::InArgs<double>& in,
                      const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;
-
+  /// f from the owned internal force: f_int - lambda f_ext on the free DOFs, frozen rows.
+  void residualFrom(const TVector& fint, const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& f) const;
   /// Local displacements (local particles * dim) for the state x at the current load factor.
   std::vector<double> localDisplacements(const Thyra::VectorBase<double>& x) const;
-  /// Owned-all internal force vector (owned particles * dim) at x.
+  /// Owned-all internal force vector (owned particles * dim) at x (with W: the Jacobian too).
   Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W,
                                       bool neighbours = false) const;
-  void buildMapsAndGraphs();
-  /// Throws the same EvaluationError on every rank if any rank failed.
-  void synchroniseFailure(int failed, std::string message, long long particle) const;
-  /// y = (df/dx) v on the owned free DOFs, linearised at the local displacements u.
-  void applyJacobian(const std::vector<double>& u, const double* v, double* y) const;
-  friend class JacobianOperator;
-  friend class DifferenceJacobianOperator;
-  double fdLambda_ = 1e-6;
-
-  struct Graphs {
-    Teuchos::RCP<TCrsGraph> owned;   // the Jacobian's graph (owned rows)
-    // Rows of ghost particles' DOFs (their owners sum them in by an Export); columns are the
-    // overlap lids. Owned rows are summed straight into the owned matrix's values.
-    Teuchos::RCP<TCrsGraph> ghost;
-    Teuchos::RCP<TCrsMatrix> ghostMatrix;
-    Teuchos::RCP<Tpetra::Export<LO, GO>> ghostExport;
-    bool anyGhost = false;           // on any rank (not on one rank)
-    std::vector<LO> ovColToOwned;    // overlap free lid -> column lid of the owned matrix (-1: none)
-  };
-  /// The owned and ghost-row graphs (every element couples all its particles, or only those
-  /// within one horizon of each other), built on first use.
-  const Graphs& graphs(bool neighbours) const;
-  Graphs buildGraphs(bool neighbours) const;
-  mutable Graphs full_, nbr_;
-  JacobianMode mode_ = JacobianMode::Assembled;
-  PreconditionerMatrix precMatrixKind_ = PreconditionerMatrix::Assembled;
-  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
-  mutable Teuchos::RCP<TCrsMatrix> precA_;
-  mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
-  // The reaction norm of the last residual evaluation, with its state and load factor, kept
-  // when no external force acts (only then do the convergence tests normalise by it): asked for
-  // at the state NOX just evaluated, it then costs no second residual. Cleared when bonds break.
-  mutable Teuchos::RCP<Thyra::VectorBase<double>> reactionX_;
-  mutable double reactionNorm_ = 0.0, reactionLambda_ = 0.0;
+  void buildExternalForce();
+  void computeRoundoffScale();
   double reactionNormOf(const TVector& fint) const;
 
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
@@ -211,19 +166,23 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   std::unique_ptr<Model> model_;
   long long begin_ = 0, end_ = 0;
   mutable double lambda_ = 0.0;  // the current load factor (an evaluation with p(0) sets it)
-  long long numFree_ = 0;
-  std::vector<long long> freeId_;       // replicated: (particle*dim + c) -> free id or -1
-  std::vector<int> overlapFreeLid_;     // local (particle*dim + c) -> overlapFree lid or -1
+  DofMaps dofs_;
+  std::unique_ptr<Assembler> assembler_;
+  std::unique_ptr<DamageBookkeeping> damage_;
 
-  Teuchos::RCP<const TMap> ownedFree_, overlapFree_, ownedAll_, overlapAll_;
-  Teuchos::RCP<Tpetra::Import<LO, GO>> allImport_;
-  Teuchos::RCP<Tpetra::Export<LO, GO>> allExport_;
+  double fdLambda_ = 1e-6;
+  JacobianMode mode_ = JacobianMode::Assembled;
+  PreconditionerMatrix precMatrixKind_ = PreconditionerMatrix::Assembled;
+  Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
+  mutable Teuchos::RCP<TCrsMatrix> precA_;
+  // The reaction norm of the last residual evaluation, with its state and load factor, kept
+  // when no external force acts (only then do the convergence tests normalise by it): asked for
+  // at the state NOX just evaluated, it then costs no second residual. Cleared when bonds break.
+  mutable Teuchos::RCP<Thyra::VectorBase<double>> reactionX_;
+  mutable double reactionNorm_ = 0.0, reactionLambda_ = 0.0;
+
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
   double fextNorm_ = 0.0;                 // its global 2-norm (the load never changes)
-  // Detached particles: their free DOFs are frozen, f = k (x - x_frozen), W_ii = k.
-  std::vector<long long> detachedAll_;
-  std::vector<std::pair<int, double>> frozen_;  // (owned free lid, frozen value)
-  double frozenStiffness_ = 1.0;
   double roundoffScale_ = 0.0;
 
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_, pSpace_;

@@ -2,6 +2,7 @@
 // A complete, validated problem description, free of Trilinos types: the discretisation
 // (replicated on every rank), the material, the effects a scene enables, and the loading.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,7 +29,7 @@ struct ProblemSpec {
   MaterialSpec material;
   bool correspondence = true;
   bool stabilization = false;
-  StabilizationSpec stab;
+  StabilizationSpec stab;               // C left at its default: computed (stabilizationSpec())
   bool damage = false;
   DamageSpec damageSpec;
   bool stressPoints = false;            // replaces the plain correspondence force state
@@ -45,6 +46,10 @@ struct ProblemSpec {
   int dim() const { return disc.dim; }
   bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }
   bool rotates() const { return rotation.angle != 0.0; }
+  /// The stabilisation's parameters as the model gets them: stab, with C = micromodulusC(material,
+  /// disc.horizon, disc.thickness) when it was left at StabilizationSpec::kFromMaterial (a host
+  /// sets only G, as a scene does).
+  StabilizationSpec stabilizationSpec() const;
   /// A non-zero displacement is prescribed somewhere (otherwise the load is dead loads only).
   bool prescribesDisplacement() const {
     for (double v : prescribed)
@@ -52,6 +57,16 @@ struct ProblemSpec {
     return false;
   }
 };
+
+/// A problem on a lattice (buildLattice) of the given material, its loading arrays sized: nothing
+/// prescribed, no body force, correspondence only. Hosts then prescribe and enable effects.
+std::shared_ptr<ProblemSpec> problemOnLattice(const LatticeSpec& lattice, const MaterialSpec& material);
+
+/// Prescribes component c of the given particles at load factor 1: u_c(X) = value(X).
+void prescribe(ProblemSpec& problem, const std::vector<int>& particles, int component,
+               const std::function<double(const Vec3& X)>& value);
+/// The same with one value for all of them (0: a support).
+void prescribe(ProblemSpec& problem, const std::vector<int>& particles, int component, double value = 0.0);
 
 /// Whether the prescribed DOFs (fixedMask) remove every rigid-body mode (translations and
 /// rotations about the body's centre): the modes restricted to the prescribed DOFs have full rank.

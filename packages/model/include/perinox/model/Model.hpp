@@ -105,8 +105,11 @@ class ElementSink {
 
 /// Stabilisation parameters (Silling 2017; seed 000 eqs 35-44).
 struct StabilizationSpec {
-  double G = 0.0;           // dimensionless
-  double C = 0.0;           // micromodulus / horizon (see micromodulusC)
+  /// C's default: "compute it" (ProblemSpec::stabilizationSpec gives micromodulusC); the model
+  /// itself needs a value >= 0.
+  static constexpr double kFromMaterial = -1.0;
+  double G = 0.0;             // dimensionless
+  double C = kFromMaterial;   // micromodulus / horizon (see micromodulusC)
 };
 
 /// Supplementary-force controls of zero-energy modes (Breitenfeld et al. 2014; seed 001 eqs 7-8):

@@ -7,8 +7,13 @@
 //                          J and J^T with its own last Jacobian;
 //   NormalizedResidualTest the seed's test |R| / scale <= tol with a round-off floor and an
 //                          optional stagnation stop, recording the normalised residual history.
-// NewtonSolver (NewtonSolver.hpp) is built from these two.
+//   newtonStatusTests      FiniteValue OR NormalizedResidualTest OR MaxIters, ready for
+//                          NOX::Solver::buildSolver.
+// NewtonSolver (NewtonSolver.hpp) is built from these.
+#include <NOX_StatusTest_Combo.H>
+#include <NOX_StatusTest_FiniteValue.H>
 #include <NOX_StatusTest_Generic.H>
+#include <NOX_StatusTest_MaxIters.H>
 #include <NOX_Thyra_Group.H>
 #include <map>
 #include <memory>
@@ -77,5 +82,16 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
   bool reaction_ = false;
   double scale_ = 1.0;
 };
+
+/// perinox's status tests for a NOX solve, as NewtonSolver uses them: combo = FiniteValue OR
+/// residual OR maxIters (the parts kept to tell afterwards which one stopped the solve).
+struct NewtonStatusTests {
+  Teuchos::RCP<NOX::StatusTest::Combo> combo;
+  Teuchos::RCP<NormalizedResidualTest> residual;
+  Teuchos::RCP<NOX::StatusTest::FiniteValue> finite;
+  Teuchos::RCP<NOX::StatusTest::MaxIters> maxIters;
+};
+NewtonStatusTests newtonStatusTests(Teuchos::RCP<const ResidualScale> scale, double tolerance, int maxIterations,
+                                    double floorFactor = 2.0, int stagnationStop = 0);
 
 }  // namespace perinox

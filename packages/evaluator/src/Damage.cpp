@@ -1,0 +1,181 @@
+// Damage bookkeeping (see DamageBookkeeping.hpp): broken bonds, detached particles, fragments.
+#include "perinox/evaluator/DamageBookkeeping.hpp"
+
+#include <Teuchos_CommHelpers.hpp>
+#include <algorithm>
+
+namespace perinox {
+
+DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem,
+                                     Model& model, const DofMaps& dofs, long long begin, long long end)
+    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), begin_(begin), end_(end) {
+  // Stiffness of frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows are neither
+  // negligible nor dominant in the linear solves.
+  frozen_.stiffness = problem.material.E * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
+}
+
+BreakReport DamageBookkeeping::breakBonds(const std::vector<double>& u, const double* xFree) {
+  BreakReport rep;
+  long long local = model_.breakBonds(u);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
+  detachSingular(xFree, rep);
+  return rep;
+}
+
+BreakReport DamageBookkeeping::breakMostStretched(const std::vector<double>& u, const double* xFree, double tol,
+                                                  double& maxStretch) {
+  BreakReport rep;
+  const double mine = model_.maxIntactStretch(u);
+  maxStretch = mine;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(maxStretch));
+  if (!problem_.damage || !(maxStretch >= problem_.damageSpec.sMin)) return rep;
+  long long local = model_.breakBondsAbove(u, maxStretch - tol);
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
+  detachSingular(xFree, rep);
+  return rep;
+}
+
+std::vector<std::pair<long long, long long>> DamageBookkeeping::ownedBrokenBonds() const {
+  // The model's owned families start as the discretisation's (Partition.cpp) and only lose bonds.
+  const auto& d = problem_.disc;
+  const LocalParticles& lp = model_.particles();
+  std::vector<std::pair<long long, long long>> out;
+  std::vector<long long> now;
+  for (int i = 0; i < lp.numOwned; ++i) {
+    const long long g = lp.globalId[i];
+    now.clear();
+    for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q) now.push_back(lp.globalId[lp.famIndex[q]]);
+    std::sort(now.begin(), now.end());
+    for (auto q = d.familyOffset[g]; q < d.familyOffset[g + 1]; ++q)
+      if (!std::binary_search(now.begin(), now.end(), d.familyIndex[q])) out.emplace_back(g, d.familyIndex[q]);
+  }
+  return out;
+}
+
+std::vector<std::pair<long long, double>> DamageBookkeeping::ownedFrozenDofs() const {
+  std::vector<std::pair<long long, double>> out;
+  for (const auto& [lid, value] : frozen_.dofs) out.emplace_back(dofs_.ownedFree->getGlobalElement(lid), value);
+  return out;
+}
+
+void DamageBookkeeping::restore(const std::vector<std::pair<long long, long long>>& broken,
+                                const std::vector<long long>& detached,
+                                const std::vector<std::pair<long long, double>>& frozen) {
+  std::vector<std::pair<long long, long long>> gone;
+  gone.reserve(broken.size());
+  for (auto [a, b] : broken) gone.emplace_back(std::min(a, b), std::max(a, b));
+  std::sort(gone.begin(), gone.end());
+  const LocalParticles& lp = model_.particles();
+  if (!gone.empty())
+    model_.removeBondsIf([&](int i, int j) {
+      const long long a = lp.globalId[i], b = lp.globalId[j];
+      return !std::binary_search(gone.begin(), gone.end(), std::make_pair(std::min(a, b), std::max(a, b)));
+    });
+  std::vector<long long> ids(detached);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  if (!ids.empty()) {
+    model_.isolate(ids);
+    model_.markDetached(ids);
+  }
+  detachedAll_ = ids;
+  frozen_.dofs.clear();
+  for (const auto& [gid, value] : frozen) {
+    const LO lid = dofs_.ownedFree->getLocalElement(gid);
+    if (lid != Teuchos::OrdinalTraits<LO>::invalid()) frozen_.dofs.emplace_back(lid, value);
+  }
+}
+
+void DamageBookkeeping::detachSingular(const double* xd, BreakReport& rep) {
+  const int D = problem_.dim();
+  // Isolates, marks detached and freezes (at x) the given particles (global ids, all ranks).
+  auto detach = [&](const std::vector<long long>& ids) {
+    model_.isolate(ids);
+    model_.markDetached(ids);
+    for (long long g : ids) {
+      rep.detached.push_back(g);
+      detachedAll_.push_back(g);
+      if (g < begin_ || g >= end_) continue;
+      const int l = static_cast<int>(g - begin_);
+      for (int c = 0; c < D; ++c) {
+        const int lid = dofs_.overlapFreeLid[l * D + c];
+        if (lid >= 0) frozen_.dofs.emplace_back(lid, xd[lid]);
+      }
+    }
+  };
+  for (int round = 0; round < 1000; ++round) {
+    // Every particle that became singular on any rank (rare: after damage only).
+    const auto ids = onAnyRank(model_.singularParticles());
+    if (ids.empty()) break;
+    detach(ids);
+  }
+  // Free-floating fragments: pieces the broken bonds have cut off from every prescribed DOF. Their
+  // rigid-body motion makes the tangent singular and, unloaded, any position of theirs is an
+  // equilibrium: a solver would either fail or let them drift (measured on the detaching strip:
+  // its freed middle moved 0.094 mm sideways). They are removed like detached particles, frozen
+  // where the last converged state left them, and reported.
+  if (rep.brokenBonds > 0 || !rep.detached.empty()) {
+    const auto frag = unanchoredParticles();
+    if (!frag.empty()) {
+      detach(frag);
+      rep.fragmentParticles += static_cast<long long>(frag.size());
+    }
+  }
+  std::sort(detachedAll_.begin(), detachedAll_.end());
+}
+
+std::vector<long long> DamageBookkeeping::unanchoredParticles() const {
+  const int D = problem_.dim();
+  const LocalParticles& lp = model_.particles();
+  // anchored[l]: particle l (owned or ghost) reaches a prescribed DOF through intact bonds. Spread
+  // over the owned families to a fixed point on each rank, then to the ghosts by an Import, until
+  // no rank anchors another particle.
+  std::vector<char> anchored(lp.size(), 0);
+  for (int l = 0; l < lp.numOwned; ++l) anchored[l] = problem_.fixedMask[lp.globalId[l]] != 0;
+  TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
+  long long before = -1;
+  for (;;) {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (int i = 0; i < lp.numOwned; ++i) {
+        if (anchored[i]) continue;
+        for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q)
+          if (anchored[lp.famIndex[q]]) {
+            anchored[i] = 1;
+            changed = true;
+            break;
+          }
+      }
+    }
+    long long mine = 0, total = 0;
+    for (int i = 0; i < lp.numOwned; ++i) mine += anchored[i];
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(total));
+    if (total == before) break;
+    before = total;
+    {
+      auto od = owned.getDataNonConst();
+      for (int i = 0; i < lp.numOwned; ++i)
+        for (int c = 0; c < D; ++c) od[i * D + c] = anchored[i];
+    }
+    ghosted.doImport(owned, *dofs_.allImport, Tpetra::INSERT);
+    auto gd = ghosted.getData();
+    for (int l = lp.numOwned; l < lp.size(); ++l) anchored[l] = anchored[l] || gd[l * D] > 0.5;
+  }
+  std::vector<long long> loose;
+  for (int i = 0; i < lp.numOwned; ++i)
+    if (!anchored[i] && !model_.detached(i)) loose.push_back(lp.globalId[i]);
+  return onAnyRank(loose);
+}
+
+std::vector<long long> DamageBookkeeping::onAnyRank(const std::vector<long long>& mine) const {
+  const long long n = problem_.disc.size();
+  std::vector<int> flag(n, 0), all(n, 0);
+  for (long long g : mine) flag[g] = 1;
+  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), flag.data(), all.data());
+  std::vector<long long> ids;
+  for (long long g = 0; g < n; ++g)
+    if (all[g]) ids.push_back(g);
+  return ids;
+}
+
+}  // namespace perinox

@@ -1,0 +1,62 @@
+// Output for host programs (see HostOutput.hpp).
+#include "perinox/io/HostOutput.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <stdexcept>
+
+#include "perinox/io/Output.hpp"
+
+namespace perinox {
+
+void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x) {
+  const auto& d = ev.problem().disc;
+  const int D = ev.problem().dim();
+  const int rank = ev.comm()->getRank(), ranks = ev.comm()->getSize();
+  const auto u = ev.ownedDisplacements(x);
+  const auto outs = ev.ownedOutputs(x);
+  std::vector<Eigen::Vector3d> points;
+  PointField displacement{"displacement", 3, {}}, stress{"cauchy_stress", 9, {}};
+  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    const std::size_t l = static_cast<std::size_t>(p - ev.firstOwned());
+    points.push_back(d.X[p]);
+    for (int c = 0; c < 3; ++c) displacement.values.push_back(c < D ? u[l * D + c] : 0.0);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) stress.values.push_back(outs[l].cauchy(r, c));
+  }
+  std::vector<PointField> fields{displacement, stress};
+  if (ev.problem().damage) fields.push_back({"damage", 1, ev.ownedDamage()});
+  if (rank == 0) std::filesystem::create_directories(dir);
+  ev.comm()->barrier();  // the folder exists before any rank writes into it
+  writeVtu(dir + "/fields_" + std::to_string(rank) + ".vtu", points, fields);
+  if (rank == 0) {
+    std::vector<std::string> pieces;
+    for (int r = 0; r < ranks; ++r) pieces.push_back("fields_" + std::to_string(r) + ".vtu");
+    writePvtu(dir + "/fields.pvtu", pieces, fields);
+  }
+}
+
+void writeProbeSummary(const std::string& file, const Teuchos::Comm<int>& comm, const std::vector<ProbeHistory>& probes,
+                       const std::string& extra) {
+  if (comm.getRank() != 0) return;
+  const auto folder = std::filesystem::path(file).parent_path();
+  if (!folder.empty()) std::filesystem::create_directories(folder);
+  std::ofstream f(file);
+  f << std::setprecision(17) << "{\"ranks\": " << comm.getSize() << (extra.empty() ? "" : ", ") << extra
+    << ",\n \"probes\": {";
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    f << (k ? ",\n  " : "") << "\"" << probes[k].name << "\": [";
+    const auto& v = probes[k].values;
+    for (std::size_t s = 0; s < v.size(); ++s) {
+      f << (s ? ", " : "") << "{\"load_factor\": " << v[s].first << ", \"" << probes[k].quantity << "\": [";
+      for (std::size_t c = 0; c < v[s].second.size(); ++c) f << (c ? ", " : "") << v[s].second[c];
+      f << "]}";
+    }
+    f << "]";
+  }
+  f << "}}\n";
+  if (!f) throw std::runtime_error("cannot write '" + file + "'");
+}
+
+}  // namespace perinox
