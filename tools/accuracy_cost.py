@@ -16,6 +16,11 @@ are recorded beside the time. Each run is the perinox driver; wall time is
 the driver's own (summary.json, set-up included), measured one run at a time.
 Writes OUT/accuracy_cost.csv and OUT/accuracy_cost.png (log-log error against time; the
 lower-left frontier is what a user chooses from).
+
+--study block: the large-problem frontier instead (issue 19): the stabilised tension block
+(xml/tension_block.xml, Silling G = 0.5) at delta = 1.015 and 3.015 dx from 3 200 to 204 800
+particles (4e5 unknowns), error e_u of the displacement against the scene's affine reference,
+with the presets that finish there: scalable at every size, MUMPS and GMRES + ILU(0) up to 51 200.
 """
 import argparse
 import csv
@@ -27,8 +32,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 REF = -3.127274
 
 
-def run(perinox, out, sets):
-    cmd = [perinox, "run", os.path.join(ROOT, "xml", "clamped_beam.xml"), "--output", out, "--quiet"]
+def run(perinox, out, sets, scene="clamped_beam.xml"):
+    cmd = [perinox, "run", os.path.join(ROOT, "xml", scene), "--output", out, "--quiet"]
     for s in sets:
         cmd += ["--set", s]
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", PERINOX_PLOT_SCRIPT="")
@@ -44,12 +49,16 @@ def main():
     ap.add_argument("--solvers", nargs="+", help="run only these solvers (names as in the table)")
     ap.add_argument("--merge", help="a CSV of an earlier run whose rows for other solvers are kept")
     ap.add_argument("--perinox", default=os.path.join(ROOT, "build", "drivers", "perinox"))
+    ap.add_argument("--study", choices=["beam", "block"], default="beam")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    if a.study == "block":
+        return block_study(a)
     grids = ["{75,3}", "{125,5}"] if a.quick else ["{75,3}", "{125,5}", "{175,7}", "{225,9}"]
     horizons = ["1.015"] if a.quick else ["1.015", "2.015"]
     solvers = [("Newton/direct", ["Solver/Linear Solver Preset=direct"]),
                ("Newton/GMRES+ILU", ["Solver/Linear Solver Preset=gmres-ilu"]),
+               ("Newton/scalable", ["Solver/Linear Solver Preset=scalable"]),
                ("Newton/GMRES+MueLu", ["Solver/Linear Solver Preset=gmres-muelu"]),
                ("matrix-free/MueLu", ["Solver/Linear Solver Preset=mf-muelu"]),
                ("matrix-free/ILU(asm)", ["Solver/Linear Solver Preset=mf-assembled-ilu"]),
@@ -118,7 +127,7 @@ def main():
               "(run with /usr/bin/python3, which has python3-matplotlib)")
         return
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(14, 6), gridspec_kw={"width_ratios": [1.6, 1]})
-    markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/GMRES+MueLu": "^", "matrix-free/MueLu": "v",
+    markers = {"Newton/direct": "o", "Newton/GMRES+ILU": "s", "Newton/scalable": "*", "Newton/GMRES+MueLu": "^", "matrix-free/MueLu": "v",
                "matrix-free/ILU(asm)": "D", "Jacobian-free/ILU": "P", "ADR": "x"}
     colours = {"1.015": "C0", "2.015": "C1"}
     for r in rows:
@@ -154,6 +163,69 @@ def main():
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "accuracy_cost.png"), dpi=110)
     print("wrote", os.path.join(a.out, "accuracy_cost.csv"), "and accuracy_cost.png")
+
+
+def block_study(a):
+    """Error e_u against wall time on the stabilised tension block, to 4e5 unknowns."""
+    grids = ["80x40", "160x80", "320x160"] if a.quick else ["80x40", "160x80", "320x160", "640x320"]
+    solvers = [("Newton/scalable", "scalable", None), ("Newton/MUMPS", "mumps", 51200),
+               ("Newton/GMRES+ILU(0)", "gmres-ilu0", 51200)]
+    if a.solvers:
+        solvers = [sv for sv in solvers if sv[0] in a.solvers]
+    rows = []
+    for grid in grids:
+        nx, ny = (int(v) for v in grid.split("x"))
+        for h in ["1.015", "3.015"]:
+            for name, preset, largest in solvers:
+                if largest is not None and nx * ny > largest:
+                    continue
+                tag = f"block_{grid}_{h}_{preset}"
+                s = run(a.perinox, os.path.join(a.out, "runs", tag),
+                        [f"Discretization/Particles={{{nx},{ny}}}", f"Discretization/Horizon Factor={h}",
+                         "Model/Stabilization=Silling", "Model/G=0.5", "Solver/Load Steps=1",
+                         f"Solver/Linear Solver Preset={preset}", "Output/VTK=false", "Output/Plots=false"],
+                        scene="tension_block.xml")
+                err = s["errors"]["e_u"] if s["converged"] else float("nan")
+                rows.append(dict(particles=nx * ny, horizon=h, solver=name, converged=s["converged"], error=err,
+                                 wall_time_s=s["wall_time_s"], dofs=s["dofs"], newton=s["newton_iterations_total"],
+                                 krylov=s["krylov_iterations_total"], linear_solves=s["linear_solves_total"],
+                                 peak_rss_mib=s.get("peak_rss_mib_max_rank", float("nan"))))
+                print(f"{nx * ny:>7} delta {h} {name:>20}: e_u {err:.3e}  time {s['wall_time_s']:8.2f} s  "
+                      f"unknowns {s['dofs']}  krylov/solve {s['krylov_iterations_total'] / max(1, s['linear_solves_total']):.1f}"
+                      f"  peak {s.get('peak_rss_mib_max_rank', float('nan')):.0f} MiB", flush=True)
+    with open(os.path.join(a.out, "accuracy_cost_block.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib is missing from this Python: the CSV is written, the plot is not")
+        return
+    fig, ax = plt.subplots(figsize=(8, 6))
+    markers = {"Newton/scalable": "*", "Newton/MUMPS": "o", "Newton/GMRES+ILU(0)": "s"}
+    colours = {"1.015": "C0", "3.015": "C1"}
+    for r in rows:
+        if r["converged"]:
+            ax.scatter(r["wall_time_s"], r["error"], marker=markers[r["solver"]], color=colours[r["horizon"]], s=60)
+            ax.annotate(str(r["dofs"]), (r["wall_time_s"], r["error"]), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    for name, m in markers.items():
+        ax.scatter([], [], marker=m, color="k", label=name)
+    for h, c in colours.items():
+        ax.scatter([], [], marker="o", color=c, label=f"delta = {h} dx")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time of the run [s] (labels: unknowns)")
+    ax.set_ylabel("displacement error e_u against the affine solution")
+    ax.set_title("Stabilised tension block (G = 0.5): accuracy against cost")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.out, "accuracy_cost_block.png"), dpi=110)
+    print("wrote", os.path.join(a.out, "accuracy_cost_block.csv"), "and accuracy_cost_block.png")
 
 
 if __name__ == "__main__":
