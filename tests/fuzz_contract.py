@@ -98,7 +98,7 @@ ENUMS = {
     "Probes/*/Quantity": ("Displacement", "Reaction", "Profile"),
     "Reference/Type": ("None", "Hydrostatic Hencky", "Uniform Stretch", "Affine", "Seed001 Bar"),
     "Solver/Linear Solver Preset": ("direct", "mumps", "gmres-ilu", "gmres-ilu0", "gmres-muelu", "cg-ilu",
-                                    "mf-ilu", "mf-assembled-ilu", "mf-muelu", "jfnk-ilu", "custom"),
+                                    "mf-ilu", "mf-assembled-ilu", "mf-muelu", "jfnk-ilu", "scalable", "custom"),
     "Discretization/Fictitious Sides": SIDES,
 }
 REFUSE, ANY, OK = "refuse", "any", "ok"
@@ -1135,7 +1135,8 @@ def mut_restart(rng, case, schema):
 
 def mut_mpi(rng, case, schema):
     case.ranks = 2
-    preset, expect = rng.choice((("gmres-ilu", ANY), ("mumps", ANY), ("direct", REFUSE)))
+    # direct is MUMPS on more than one rank (KLU2 is wrong in parallel in this build)
+    preset, expect = rng.choice((("gmres-ilu", ANY), ("mumps", ANY), ("direct", ANY), ("scalable", ANY)))
     set_param(case.root, ("Solver", "Linear Solver Preset"), "string", preset)
     case.touch(("Solver", "Linear Solver Preset"))
     case.note("mpi2", expect, f"mpiexec -np 2, preset {preset}")
