@@ -1,0 +1,106 @@
+# Exodus II meshes in and results out (docs/exodus.md). Included by tests/CMakeLists.txt when
+# the Exodus library was found (scripts/setup.sh installs it, so CI always runs these).
+
+# The reader on self-written meshes (closed-form volumes, node sets), bad meshes, and Peridigm's
+# tensile_test.g against its particle file; on 1 and 3 ranks (each rank reads on its own).
+set(PERINOX_TENSILE_DIR ${PROJECT_SOURCE_DIR}/../shared/benchmarks)
+get_filename_component(PERINOX_TENSILE_DIR ${PERINOX_TENSILE_DIR} ABSOLUTE)
+perinox_add_gtest(NAME io_exodus_mesh SOURCES exodus/test_exodus_mesh.cpp OWN_MAIN LIBS perinox_core MPI::MPI_CXX
+  NPS 1 3 LABELS unit)
+perinox_link_exodus(io_exodus_mesh)
+target_include_directories(io_exodus_mesh PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
+if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.g AND EXISTS ${PERINOX_TENSILE_DIR}/tensile_bar_points.txt)
+  target_compile_definitions(io_exodus_mesh PRIVATE PERINOX_TENSILE_DIR="${PERINOX_TENSILE_DIR}")
+else()
+  message(STATUS "perinox: ${PERINOX_TENSILE_DIR}/tensile_test.g not found: the tensile-test comparison is not built")
+endif()
+
+# The meshes (and their closed-form particle files) the driver runs below read, written by a
+# helper with the Exodus C API (tests/exodus/make_exodus_meshes.cpp), beside the test scenes so
+# that the scenes' relative 'Mesh File' and 'Particle File' paths resolve.
+set(EXO_DIR ${CMAKE_CURRENT_BINARY_DIR}/exodus_meshes)
+file(MAKE_DIRECTORY ${EXO_DIR})
+foreach(scene bar_exodus bar_points quad_exodus quad_points)
+  configure_file(${CMAKE_CURRENT_SOURCE_DIR}/exodus/${scene}.xml ${EXO_DIR}/${scene}.xml COPYONLY)
+endforeach()
+add_executable(make_exodus_meshes exodus/make_exodus_meshes.cpp)
+perinox_link_exodus(make_exodus_meshes)
+target_include_directories(make_exodus_meshes PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
+add_test(NAME exodus_meshes_setup COMMAND make_exodus_meshes ${EXO_DIR})
+set_tests_properties(exodus_meshes_setup PROPERTIES FIXTURES_SETUP exodus_meshes LABELS unit)
+
+# perinox_exodus_run(NAME <name> SCENE <scene in EXO_DIR> NP <n> [SETS ...]): the driver on a
+# test scene, which must converge; a fixture <name> for the comparisons.
+function(perinox_exodus_run)
+  cmake_parse_arguments(R "" "NAME;SCENE;NP" "SETS;CHECK" ${ARGN})
+  perinox_mpi_command(mpi ${R_NP})
+  set(cmd ${mpi} $<TARGET_FILE:perinox> run ${EXO_DIR}/${R_SCENE} --output ${PERINOX_TEST_OUT}/${R_NAME} --quiet)
+  foreach(s ${R_SETS})
+    list(APPEND cmd --set ${s})
+  endforeach()
+  add_test(NAME ${R_NAME} COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/${R_NAME} --converged ${R_CHECK} -- ${cmd})
+  set(labels unit)
+  if(R_NP GREATER 1)
+    list(APPEND labels mpi)
+  endif()
+  set_tests_properties(${R_NAME} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT=" LABELS "${labels}"
+    PROCESSORS ${R_NP} TIMEOUT 600 FIXTURES_REQUIRED exodus_meshes FIXTURES_SETUP ${R_NAME})
+endfunction()
+
+# Reading on 1 and 3 ranks: the bar (hex, two blocks, a node set by name, a side set by id, a block
+# by name) and the 2D plate (quads, thickness, node sets by name and id, a block by id) from Exodus give the probes of the same scenes on the
+# closed-form particle files, to 1e-12 (the particles agree to round-off: the meshes' coordinates
+# are multiples of 0.25 and 0.1, the volumes sums of 8 or 4 quadrature terms), and the 3-rank
+# runs the 1-rank ones to 1e-10 (the rank-independence bound of mpi_cantilever_compare).
+foreach(case bar quad)
+  perinox_exodus_run(NAME exodus_${case}_points SCENE ${case}_points.xml NP 1)
+  foreach(np 1 3)
+    perinox_exodus_run(NAME exodus_${case}_np${np} SCENE ${case}_exodus.xml NP ${np})
+  endforeach()
+  add_test(NAME exodus_${case}_equals_points COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_${case}_points ${PERINOX_TEST_OUT}/exodus_${case}_np1)
+  set_tests_properties(exodus_${case}_equals_points PROPERTIES LABELS unit
+    FIXTURES_REQUIRED "exodus_${case}_points;exodus_${case}_np1")
+  add_test(NAME exodus_${case}_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-10 ${PERINOX_TEST_OUT}/exodus_${case}_np1 ${PERINOX_TEST_OUT}/exodus_${case}_np3)
+  set_tests_properties(exodus_${case}_ranks_compare PROPERTIES LABELS mpi
+    FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_np3")
+endforeach()
+
+# Bad meshes and mesh regions: one sentence naming the file (and block and element), exit code 2,
+# nothing written.
+function(perinox_bad_mesh name scene message)
+  perinox_bad_input(${name} ${EXO_DIR}/${scene} "${message}" ${ARGN})
+  set_tests_properties(badinput_${name} PROPERTIES FIXTURES_REQUIRED exodus_meshes)
+endfunction()
+set(MF "Discretization/Mesh File")
+perinox_bad_mesh(exodus_inverted_hex bar_exodus.xml
+  "inverted.e: element 2 of element block 1 ('left part') ('HEX8') is inverted or degenerate" --set "${MF}=inverted.e")
+perinox_bad_mesh(exodus_flat_tet bar_exodus.xml
+  "flat_tet.e: element 1 of element block 1 ('TETRA') has zero volume" --set "${MF}=flat_tet.e")
+perinox_bad_mesh(exodus_pyramid bar_exodus.xml
+  "pyramid.e: element block 1 has elements of type 'PYRAMID5' with 5 nodes, which perinox does not read" --set "${MF}=pyramid.e")
+perinox_bad_mesh(exodus_no_blocks bar_exodus.xml "no_blocks.e: has no element blocks" --set "${MF}=no_blocks.e")
+perinox_bad_mesh(exodus_sphere_no_volume bar_exodus.xml
+  "sphere_no_volume.e: element block 1 has sphere elements with 1 attribute(s)" --set "${MF}=sphere_no_volume.e")
+perinox_bad_mesh(exodus_not_exodus bar_exodus.xml "not_exodus.e: is not an Exodus II file" --set "${MF}=not_exodus.e")
+perinox_bad_mesh(exodus_missing_file bar_exodus.xml "no_such_mesh.e: cannot open the Exodus mesh" --set "${MF}=no_such_mesh.e")
+perinox_bad_mesh(exodus_2d_mesh_3d_scene bar_exodus.xml "quad.e: is a 2D mesh but the scene is 3D" --set "${MF}=quad.e")
+perinox_bad_mesh(exodus_3d_mesh_2d_scene quad_exodus.xml
+  "bar.e: element block 1 ('left part') has 3D elements ('HEX8') but the scene is 2D" --set "${MF}=bar.e")
+perinox_bad_mesh(exodus_no_mesh_file bar_exodus.xml "'Discretization/Mesh File' is required when Type = Exodus" --set "${MF}=")
+perinox_bad_mesh(exodus_mesh_file_for_particles bar_points.xml "'Discretization/Mesh File' is for Type = Exodus" --set "${MF}=bar.e")
+perinox_bad_mesh(exodus_node_set_unknown bar_exodus.xml "region 'left': the mesh has no Node Set with name 'nope'"
+  --set "Regions/left/Name=nope")
+perinox_bad_mesh(exodus_node_set_id_unknown quad_exodus.xml "region 'right': the mesh has no Node Set with id 7"
+  --set "Regions/right/Id=7")
+perinox_bad_mesh(exodus_side_set_unknown bar_exodus.xml "region 'right': the mesh has no Side Set with id 2"
+  --set "Regions/right/Id=2")
+perinox_bad_mesh(exodus_name_and_id bar_exodus.xml "region 'left' (Type = Node Set) needs exactly one of Name and Id"
+  --set "Regions/left/Id=1")
+perinox_bad_mesh(exodus_node_set_on_particles bar_points.xml "region 'left' is a Node Set, which needs 'Discretization/Type' = Exodus"
+  --set "Regions/left/Type=Node Set" --set "Regions/left/Name=left")
+perinox_bad_mesh(exodus_block_unknown bar_exodus.xml "region 'second half': the mesh has no element block named 'middle'"
+  --set "Regions/second half/Name=middle")
+perinox_bad_mesh(block_empty bar_points.xml "region 'second half': no particle is in block 5"
+  --set "Regions/second half/Id=5")
