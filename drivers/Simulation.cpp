@@ -24,6 +24,7 @@
 #include <unistd.h>  // environ (GNU)
 #include <fcntl.h>
 
+#include "ExodusResults.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
 #include "perinox/io/OutputFolder.hpp"
@@ -1038,7 +1039,8 @@ struct Solved {
 /// Load stepping (LoadStepper with perinox's damage policy and observers) or arc-length
 /// continuation from zero load or a checkpoint; fills res's steps, probes and path.
 Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& evaluator, const RunOptions& options,
-                  const FolderPlan& checkpointFolder, const std::optional<Checkpoint>& resume, RunResult& res, double t0) {
+                  const FolderPlan& checkpointFolder, const std::optional<Checkpoint>& resume, RunResult& res, double t0,
+                  StepObserver* exodus = nullptr) {
   const auto comm = evaluator->comm();
   const int rank = comm->getRank(), nranks = comm->getSize();
   const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
@@ -1148,6 +1150,7 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
   stepper.addObserver(&console);
   if (scene.solver.stabilityCheck) stepper.addObserver(&stability);
   if (checkpoints) stepper.addObserver(&checkpointer);
+  if (exodus) stepper.addObserver(exodus);  // after the probes: it writes their values
 
   Solved out;
   out.x = Thyra::createMember(evaluator->get_x_space());
@@ -1226,7 +1229,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
   });
 
-  const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0);
+  // Output/Format = Exodus or Both: fields.e in the staging folder, a time step per converged step.
+  std::unique_ptr<ExodusRecorder> exodus;
+  if (scene.output.format != "VTU") exodus = std::make_unique<ExodusRecorder>(*evaluator, scene, res, staging);
+  const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0, exodus.get());
   const auto& xConverged = solved.x;
   const double lambda = solved.loadFactor, elapsedBefore = solved.elapsedBefore;
   const int segment = solved.segment;
@@ -1240,7 +1246,13 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     res.hasError = true;
     res.errorU = displacementError(*evaluator, scene.reference, u);
   }
-  agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks); });
+  const bool vtu = scene.output.vtk && scene.output.format != "Exodus";
+  agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, vtu, rank, nranks); });
+  if (exodus) {
+    // Arc-length continuation (no load-stepping observers) or no accepted step: the state written.
+    if (exodus->steps() == 0) exodus->record(*xConverged, lambda);
+    exodus->close();
+  }
   res.wallTime = now() - t0 + elapsedBefore;
   RunFacts facts;
   measureFootprint(*evaluator, *comm, facts);

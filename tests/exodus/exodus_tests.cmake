@@ -104,3 +104,39 @@ perinox_bad_mesh(exodus_block_unknown bar_exodus.xml "region 'second half': the 
   --set "Regions/second half/Name=middle")
 perinox_bad_mesh(block_empty bar_points.xml "region 'second half': no particle is in block 5"
   --set "Regions/second half/Id=5")
+
+# Exodus results: the cantilever (xml/cantilever.xml, 4 load steps) with Output/Format = Both on
+# 1 rank (direct) and 3 ranks (gmres-ilu), and Exodus alone; fields.e read back with the Exodus
+# library (tests/exodus/check_exodus_output.cpp) must equal fields.csv at the last step and
+# summary.json's tip probe at every step (on 3 ranks: the gather to rank 0 put every rank's
+# particles in their place).
+find_package(nlohmann_json REQUIRED)
+add_executable(check_exodus_output exodus/check_exodus_output.cpp)
+perinox_link_exodus(check_exodus_output)
+target_link_libraries(check_exodus_output PRIVATE nlohmann_json::nlohmann_json)
+foreach(np 1 3)
+  set(preset direct)
+  if(np GREATER 1)
+    set(preset gmres-ilu)
+  endif()
+  foreach(format Both Exodus)
+    set(name exodus_output_cantilever_${format}_np${np})
+    perinox_run_test(NAME ${name} SCENE cantilever.xml NP ${np}
+      SETS "Output/Format=${format}" "Solver/Load Steps=4" "Solver/Linear Solver Preset=${preset}"
+      CHECK --converged FIXTURE_SETUP ${name} LABELS unit)
+    set(extra)
+    if(format STREQUAL "Exodus")
+      set(extra --no-vtu)
+    endif()
+    add_test(NAME ${name}_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/${name} --probe tip=tip --blocks 1 ${extra})
+    set_tests_properties(${name}_check PROPERTIES LABELS unit FIXTURES_REQUIRED ${name})
+  endforeach()
+endforeach()
+# Block structure kept: the two-block bar's fields.e has blocks 1 and 2, and its spheres' volumes
+# sum to the bar's volume, 4 x 1 x 1.
+perinox_exodus_run(NAME exodus_output_bar SCENE bar_exodus.xml NP 3 SETS "Output/Format=Exodus")
+add_test(NAME exodus_output_bar_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar
+  --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu)
+set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar)
+# Complete or absent: a bad mesh with Exodus output writes nothing.
+perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
