@@ -140,3 +140,27 @@ add_test(NAME exodus_output_bar_check COMMAND check_exodus_output ${PERINOX_TEST
 set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar)
 # Complete or absent: a bad mesh with Exodus output writes nothing.
 perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
+
+# tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers, and
+# perinox accepts all of it (mesh, node sets, conditions, rigid-body check) up to the solver,
+# which the test swaps for one refused on two ranks so that nothing is solved; a deck it cannot
+# translate is refused with one sentence.
+if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
+  set(PD_SCENE ${CMAKE_CURRENT_BINARY_DIR}/peridigm/tensile_test.xml)
+  add_test(NAME tools_peridigm_to_scene COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py
+    ${PERINOX_TENSILE_DIR}/tensile_test.yaml --out ${PD_SCENE})
+  set_tests_properties(tools_peridigm_to_scene PROPERTIES LABELS unit FIXTURES_SETUP peridigm_scene)
+  add_test(NAME tools_peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
+  set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_scene)
+  perinox_mpi_command(mpi2 2)
+  add_test(NAME tools_peridigm_scene_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_scene
+    --exit-code 2 --message "runs on one MPI rank only" --no-output --
+    ${mpi2} $<TARGET_FILE:perinox> run ${PD_SCENE} --set "Solver/Linear Solver Preset=direct" --output ${PERINOX_TEST_OUT}/peridigm_scene)
+  set_tests_properties(tools_peridigm_scene_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS "unit;mpi"
+    PROCESSORS 2 FIXTURES_REQUIRED peridigm_scene)
+endif()
+add_test(NAME tools_peridigm_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
+  "is not of the form t (a + b x + c y + d z)" --
+  ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py ${CMAKE_CURRENT_SOURCE_DIR}/exodus/bad_deck.yaml
+  --out ${CMAKE_CURRENT_BINARY_DIR}/peridigm/bad_deck.xml)
+set_tests_properties(tools_peridigm_bad_deck PROPERTIES LABELS "unit;badinput")

@@ -117,6 +117,8 @@ TEST(ExodusMesh, TetrahedraAndNodeSet) {
   EXPECT_NEAR(d.volume[6], 4.0, kTol);
   EXPECT_LT((d.X[6] - Vec3(10.5, 0.75, 1.0)).norm(), kTol);
   EXPECT_EQ(d.block[6], 2);
+  EXPECT_EQ(m.blocks[0].name, "block_1");  // unnamed: Peridigm's default name
+  EXPECT_EQ(m.blocks[1].name, "corner");
   ASSERT_EQ(m.nodeSets.size(), 1u);
   EXPECT_EQ(m.nodeSets[0].particles, (std::vector<int>{0, 1, 2, 3, 4, 5}));
 }
@@ -152,6 +154,7 @@ TEST(ExodusMesh, SpheresGiveParticlesDirectly) {
     EXPECT_EQ(m.disc.X[p], Vec3(p, 0, 0));
   }
   EXPECT_EQ(m.nodeSets[0].particles, std::vector<int>{2});
+  EXPECT_EQ(m.nodeSets[0].name, "nodelist_1");  // unnamed: Peridigm's default name
 }
 
 TEST(ExodusMesh, RefusesBadMeshesWithOneSentence) {

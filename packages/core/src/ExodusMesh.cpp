@@ -224,7 +224,8 @@ std::string entityName(int exo, ex_entity_type type, int id) {
 }
 
 std::string blockLabel(int id, const std::string& name) {
-  return "element block " + std::to_string(id) + (name.empty() ? "" : " ('" + name + "')");
+  const bool given = !name.empty() && name != "block_" + std::to_string(id);
+  return "element block " + std::to_string(id) + (given ? " ('" + name + "')" : "");
 }
 
 }  // namespace
@@ -282,6 +283,7 @@ ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
     MeshBlock blk;
     blk.id = blockIds[b];
     blk.name = entityName(exo, EX_ELEM_BLOCK, blk.id);
+    if (blk.name.empty()) blk.name = "block_" + std::to_string(blk.id);  // Peridigm's name for an unnamed block
     char type[MAX_STR_LENGTH + 1] = {0};
     int count = 0, nodesPer = 0, attrs = 0;
     if (ex_get_elem_block(exo, blk.id, type, &count, &nodesPer, &attrs) < 0)
@@ -364,6 +366,7 @@ ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
       MeshSet set;
       set.id = id;
       set.name = entityName(exo, EX_NODE_SET, id);
+      if (set.name.empty()) set.name = "nodelist_" + std::to_string(id);  // Peridigm's name for an unnamed node set
       int n = 0, df = 0;
       if (ex_get_node_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
       std::vector<int> nodes(n);

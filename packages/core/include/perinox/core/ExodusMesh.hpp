@@ -14,7 +14,7 @@ namespace perinox {
 /// One element block of the mesh, in file order.
 struct MeshBlock {
   int id = 0;
-  std::string name;          // the block's name in the file ("" if none)
+  std::string name;          // the block's name in the file ("block_<id>" if none, as Peridigm names it)
   std::string elementType;   // as written in the file ("HEX8", "TETRA", "SPHERE", ...)
   int elements = 0;
 };
@@ -25,7 +25,8 @@ struct MeshBlock {
 /// whose sides are listed.
 struct MeshSet {
   int id = 0;
-  std::string name;          // the set's name in the file ("" if none)
+  std::string name;          // the set's name in the file (node sets without one: "nodelist_<id>", as
+                             // Peridigm names them; side sets: "")
   std::vector<int> particles;
 };
 
