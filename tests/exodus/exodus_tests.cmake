@@ -183,3 +183,14 @@ if(PERINOX_LONG_TESTS AND EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.g)
   set_tests_properties(exodus_tensile_mesh_equals_points PROPERTIES LABELS long
     FIXTURES_REQUIRED "exodus_tensile_exodus;exodus_tensile_points")
 endif()
+
+# Round trip: the bar's fields.e read back as a mesh of sphere elements (volume = second
+# attribute, the scene's regions as node sets, blocks block_1 and block_2) gives the bar's
+# particles, so the run on it equals the run on bar.e (to 1e-12 as above).
+perinox_exodus_run(NAME exodus_roundtrip_bar SCENE bar_exodus.xml NP 1
+  SETS "Discretization/Mesh File=${PERINOX_TEST_OUT}/exodus_output_bar/fields.e" "Regions/right/Type=Node Set"
+       "Regions/right/Id=-1" "Regions/right/Name=right" "Regions/second half/Name=block_2")
+set_property(TEST exodus_roundtrip_bar APPEND PROPERTY FIXTURES_REQUIRED exodus_output_bar)
+add_test(NAME exodus_roundtrip_bar_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_bar_np1 ${PERINOX_TEST_OUT}/exodus_roundtrip_bar)
+set_tests_properties(exodus_roundtrip_bar_compare PROPERTIES LABELS unit FIXTURES_REQUIRED "exodus_bar_np1;exodus_roundtrip_bar")
