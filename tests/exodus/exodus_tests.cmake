@@ -142,9 +142,9 @@ set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQ
 perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
 
 # tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers, and
-# perinox accepts all of it (mesh, node sets, conditions, rigid-body check) up to the solver,
-# which the test swaps for one refused on two ranks so that nothing is solved; a deck it cannot
-# translate is refused with one sentence.
+# perinox accepts all of it (mesh, node sets, conditions, the rigid-body check: the scene is built
+# before the run starts), stopping before any solve at a --restart folder that does not exist;
+# a deck it cannot translate is refused with one sentence.
 if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
   set(PD_SCENE ${CMAKE_CURRENT_BINARY_DIR}/peridigm/tensile_test.xml)
   add_test(NAME tools_peridigm_to_scene COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py
@@ -152,12 +152,13 @@ if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
   set_tests_properties(tools_peridigm_to_scene PROPERTIES LABELS unit FIXTURES_SETUP peridigm_scene)
   add_test(NAME tools_peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
   set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_scene)
-  perinox_mpi_command(mpi2 2)
+  perinox_mpi_command(mpi1 1)
   add_test(NAME tools_peridigm_scene_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_scene
-    --exit-code 2 --message "runs on one MPI rank only" --no-output --
-    ${mpi2} $<TARGET_FILE:perinox> run ${PD_SCENE} --set "Solver/Linear Solver Preset=direct" --output ${PERINOX_TEST_OUT}/peridigm_scene)
-  set_tests_properties(tools_peridigm_scene_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS "unit;mpi"
-    PROCESSORS 2 FIXTURES_REQUIRED peridigm_scene)
+    --exit-code 2 --message "no state.json there (not a checkpoint)" --no-output --
+    ${mpi1} $<TARGET_FILE:perinox> run ${PD_SCENE} --restart ${CMAKE_CURRENT_BINARY_DIR}/peridigm/no-such-checkpoint
+    --output ${PERINOX_TEST_OUT}/peridigm_scene)
+  set_tests_properties(tools_peridigm_scene_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
+    FIXTURES_REQUIRED peridigm_scene)
 endif()
 add_test(NAME tools_peridigm_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
   "is not of the form t (a + b x + c y + d z)" --
