@@ -75,25 +75,22 @@ Measure hexMeasure(const std::array<Vec3, 8>& x) {
   static const double s[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
   Measure m;
-  auto at = [&](double r, double t, double u, Vec3& pos) {
+  auto at = [&](double r, double t, double u) {  // det J of the trilinear map at (r, t, u)
     Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
-    pos.setZero();
     for (int a = 0; a < 8; ++a) {
       const double fr = 1 + s[a][0] * r, ft = 1 + s[a][1] * t, fu = 1 + s[a][2] * u;
-      pos += fr * ft * fu / 8 * x[a];
       J.col(0) += s[a][0] * ft * fu / 8 * x[a];
       J.col(1) += fr * s[a][1] * fu / 8 * x[a];
       J.col(2) += fr * ft * s[a][2] / 8 * x[a];
     }
     return J.determinant();
   };
-  Vec3 pos;
   for (int a = 0; a < 8; ++a)
-    if (!(at(s[a][0], s[a][1], s[a][2], pos) > 0)) m.ok = false;
+    if (!(at(s[a][0], s[a][1], s[a][2]) > 0)) m.ok = false;
   for (double r : kGauss)
     for (double t : kGauss)
       for (double u : kGauss) {
-        const double det = at(r, t, u, pos);
+        const double det = at(r, t, u);
         if (!(det > 0)) m.ok = false;
         m.volume += det;  // weights 1
       }
@@ -115,31 +112,28 @@ Measure wedgeMeasure(const std::array<Vec3, 6>& x) {
   // times a linear coordinate u in [-1, 1]. The Jacobian determinant has degree 1 in (r, t) and 2
   // in u: the 3-point degree-2 triangle rule by 2-point Gauss integrates it exactly.
   Measure m;
-  auto at = [&](double r, double t, double u, Vec3& pos) {
+  auto at = [&](double r, double t, double u) {  // det J at (r, t, u)
     const double L[3] = {1 - r - t, r, t};
     const double dr[3] = {-1, 1, 0}, dt[3] = {-1, 0, 1};
     Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
-    pos.setZero();
     for (int a = 0; a < 3; ++a)
       for (int lvl = 0; lvl < 2; ++lvl) {
         const double f = lvl == 0 ? (1 - u) / 2 : (1 + u) / 2, df = lvl == 0 ? -0.5 : 0.5;
         const Vec3& p = x[a + 3 * lvl];
-        pos += L[a] * f * p;
         J.col(0) += dr[a] * f * p;
         J.col(1) += dt[a] * f * p;
         J.col(2) += L[a] * df * p;
       }
     return J.determinant();
   };
-  Vec3 pos;
   static const double corner[6][3] = {{0, 0, -1}, {1, 0, -1}, {0, 1, -1}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
   for (const auto& c : corner)
-    if (!(at(c[0], c[1], c[2], pos) > 0)) m.ok = false;
+    if (!(at(c[0], c[1], c[2]) > 0)) m.ok = false;
   static const double tri[3][2] = {{1.0 / 6, 1.0 / 6}, {2.0 / 3, 1.0 / 6}, {1.0 / 6, 2.0 / 3}};
   for (const auto& q : tri)
     for (double u : kGauss) {
       const double w = 1.0 / 6;  // triangle weight (area 1/2 over 3 points) times the Gauss weight 1
-      const double det = at(q[0], q[1], u, pos);
+      const double det = at(q[0], q[1], u);
       if (!(det > 0)) m.ok = false;
       m.volume += w * det;
     }
@@ -153,28 +147,25 @@ Measure wedgeMeasure(const std::array<Vec3, 6>& x) {
 Measure quadMeasure(const std::array<Vec3, 4>& x) {
   static const double s[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
   Measure m;
-  auto at = [&](double r, double t, Vec3& pos) {
+  auto at = [&](double r, double t) {  // det J of the bilinear map at (r, t)
     Eigen::Matrix2d J = Eigen::Matrix2d::Zero();
-    pos.setZero();
     for (int a = 0; a < 4; ++a) {
       const double fr = 1 + s[a][0] * r, ft = 1 + s[a][1] * t;
-      pos += fr * ft / 4 * x[a];
       J.col(0) += s[a][0] * ft / 4 * x[a].head<2>();
       J.col(1) += fr * s[a][1] / 4 * x[a].head<2>();
     }
     return J.determinant();
   };
-  Vec3 pos;
   int positive = 0, negative = 0;
   for (const auto& c : s) {
-    const double det = at(c[0], c[1], pos);
+    const double det = at(c[0], c[1]);
     positive += det > 0;
     negative += det < 0;
   }
   double signedArea = 0;
   for (double r : kGauss)
     for (double t : kGauss) {
-      const double det = at(r, t, pos);
+      const double det = at(r, t);
       positive += det > 0;
       negative += det < 0;
       signedArea += det;
