@@ -51,6 +51,7 @@ inline void write(const std::string& path, const Mesh& m) {
   int cpu = sizeof(double), io = sizeof(double);
   const int exo = ex_create(path.c_str(), EX_CLOBBER, &cpu, &io);
   check(exo, "ex_create");
+  check(ex_set_max_name_length(exo, 80), "ex_set_max_name_length");  // names beyond 32 characters
   int nelem = 0;
   for (const auto& b : m.blocks) nelem += static_cast<int>(b.conn.size()) / b.nodesPer;
   check(ex_put_init(exo, "perinox test mesh", m.dim, static_cast<int>(m.nodes.size()), nelem,
@@ -209,7 +210,7 @@ inline Mesh spheres() {
   Mesh m;
   m.nodes = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
   m.blocks = {{4, "SPHERE", 1, {1, 2, 3}, "balls", 2, {0.5, 0.1, 0.5, 0.2, 0.5, 0.3}}};
-  m.nodeSets = {{1, "", {3}}};
+  m.nodeSets = {{1, "", {3}}, {2, "a node set name longer than thirty-two characters", {1, 2}}};
   return m;
 }
 

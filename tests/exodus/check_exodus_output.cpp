@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
     fail("cannot open " + dir + "/fields.e");
     return 1;
   }
+  ex_set_max_name_length(exo, 80);  // the writer's name length (region names beyond 32 characters)
   char title[MAX_LINE_LENGTH + 1];
   int dim = 0, nodes = 0, elems = 0, nblocks = 0, nsets = 0, nside = 0;
   ex_get_init(exo, title, &dim, &nodes, &elems, &nblocks, &nsets, &nside);

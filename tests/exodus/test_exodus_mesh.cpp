@@ -155,6 +155,9 @@ TEST(ExodusMesh, SpheresGiveParticlesDirectly) {
   }
   EXPECT_EQ(m.nodeSets[0].particles, std::vector<int>{2});
   EXPECT_EQ(m.nodeSets[0].name, "nodelist_1");  // unnamed: Peridigm's default name
+  ASSERT_EQ(m.nodeSets.size(), 2u);
+  EXPECT_EQ(m.nodeSets[1].name, "a node set name longer than thirty-two characters");  // not cut to 32
+  EXPECT_EQ(m.nodeSets[1].particles, (std::vector<int>{0, 1}));
 }
 
 TEST(ExodusMesh, RefusesBadMeshesWithOneSentence) {

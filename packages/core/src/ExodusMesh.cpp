@@ -241,6 +241,9 @@ ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
   f.id = ex_open(path.c_str(), EX_READ, &cpuWordSize, &ioWordSize, &version);
   if (f.id < 0) fail(path, "is not an Exodus II file (the Exodus library cannot open it)");
   const int exo = f.id;
+  // Names longer than Exodus' default 32 characters come back whole only when asked for.
+  const int usedNameLength = static_cast<int>(ex_inquire_int(exo, EX_INQ_DB_MAX_USED_NAME_LENGTH));
+  if (usedNameLength > MAX_STR_LENGTH) ex_set_max_name_length(exo, std::min(usedNameLength, 256));
 
   char title[MAX_LINE_LENGTH + 1] = {0};
   int numDim = 0, numNodes = 0, numElem = 0, numBlocks = 0, numNodeSets = 0, numSideSets = 0;
