@@ -24,6 +24,7 @@
 #include <unistd.h>  // environ (GNU)
 #include <fcntl.h>
 
+#include "ExodusResults.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Output.hpp"
 #include "perinox/io/OutputFolder.hpp"
@@ -955,7 +956,8 @@ struct Solved {
 /// Load stepping (LoadStepper with perinox's damage policy and observers) or arc-length
 /// continuation from zero load or a checkpoint; fills res's steps, probes and path.
 Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& evaluator, const RunOptions& options,
-                  const FolderPlan& checkpointFolder, const std::optional<Checkpoint>& resume, RunResult& res, double t0) {
+                  const FolderPlan& checkpointFolder, const std::optional<Checkpoint>& resume, RunResult& res, double t0,
+                  StepObserver* exodus = nullptr) {
   const auto comm = evaluator->comm();
   const int rank = comm->getRank(), nranks = comm->getSize();
   const bool checkpoints = options.checkpointSteps > 0 || options.checkpointSeconds > 0;
@@ -1065,6 +1067,7 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
   stepper.addObserver(&console);
   if (scene.solver.stabilityCheck) stepper.addObserver(&stability);
   if (checkpoints) stepper.addObserver(&checkpointer);
+  if (exodus) stepper.addObserver(exodus);  // after the probes: it writes their values
 
   Solved out;
   out.x = Thyra::createMember(evaluator->get_x_space());
@@ -1143,9 +1146,12 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     writeFileAtomic(staging + "/scene.resolved.xml", xml.str());
   });
 
+  // Output/Format = Exodus or Both: fields.e in the staging folder, a time step per converged step.
+  std::unique_ptr<ExodusRecorder> exodus;
+  if (scene.output.format != "VTU") exodus = std::make_unique<ExodusRecorder>(*evaluator, scene, res, staging);
   comm->barrier();
   const double tSolve = now();
-  const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0);
+  const Solved solved = solveScene(scene, evaluator, options, checkpointFolder, resume, res, t0, exodus.get());
   comm->barrier();
   const double solveSeconds = now() - tSolve;
   const auto& xConverged = solved.x;
@@ -1161,7 +1167,13 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     res.hasError = true;
     res.errorU = displacementError(*evaluator, scene.reference, u);
   }
-  agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, scene.output.vtk, rank, nranks); });
+  const bool vtu = scene.output.vtk && scene.output.format != "Exodus";
+  agreed(*comm, [&] { writeFields(*evaluator, *xConverged, staging, vtu, rank, nranks); });
+  if (exodus) {
+    // Arc-length continuation (no load-stepping observers) or no accepted step: the state written.
+    if (exodus->steps() == 0) exodus->record(*xConverged, lambda);
+    exodus->close();
+  }
   res.wallTime = now() - t0 + elapsedBefore;
   RunFacts facts;
   facts.setupSeconds = tSolve - t0;

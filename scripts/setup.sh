@@ -6,6 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(cmake make g++ trilinos-all-dev libptscotch-dev libeigen3-dev libopenmpi-dev openmpi-bin libmumps-dev libopenblas0-serial
+          libexodusii-dev
           libgtest-dev nlohmann-json3-dev python3 python3-matplotlib)
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "SceneText.hpp"
+#include "perinox/core/ExodusMesh.hpp"
 
 namespace perinox {
 
@@ -150,13 +151,18 @@ ParameterList regionTemplate() {
   ParameterList r("region");
   setChoice(r, p, "Type", "Box",
             {{"Box", ""}, {"Side Layer", ""}, {"Fictitious Side", ""}, {"Nearest", ""},
-             {"All Fictitious", "needs 'Discretization/Fictitious Sides'"}, {"All Real", ""}});
+             {"All Fictitious", "needs 'Discretization/Fictitious Sides'"}, {"All Real", ""},
+             {"Node Set", "Exodus mesh: the particles of the elements touching the set's nodes (Peridigm's rule)"},
+             {"Side Set", "Exodus mesh: the particles of the elements whose sides are listed"},
+             {"Block", "the particles of a block (particle file: 5th column; Exodus: element block)"}});
   setVector(r, p, "Lower", arr<double>({0, 0, 0}), "Box: lower corner", Length::Dim);
   setVector(r, p, "Upper", arr<double>({0, 0, 0}), "Box: upper corner", Length::Dim);
   setChoice(r, p, "Population", "Real", {{"Real", ""}, {"Fictitious", ""}, {"All", "every particle"}}, "Box/Nearest: ");
   setChoice(r, p, "Side", "xmin", sideChoices(), "Side Layer / Fictitious Side: ", " (a side of the body's dimension)");
   r.set("Thickness", 0.0, "Side Layer: layer thickness (>= 0; 0 = one particle spacing)");
   setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point", Length::Dim);
+  r.set("Name", "", "Node Set / Side Set / Block: the set's or Exodus block's name in the mesh (give Name or Id)");
+  r.set("Id", -1, "Node Set / Side Set / Block: the set's or block's id (>= 0; -1: none, give Name)");
   return r;
 }
 
@@ -214,22 +220,24 @@ Teuchos::RCP<ParameterList> buildSchema() {
   s->set("Expected Outcome", "", "for test scenes: 'converged', or 'failure: TEXT' where TEXT must appear in the failure reason");
   auto& d = s->sublist("Discretization", false, "particles and families");
   const std::string dp = "Discretization";
-  setChoice(d, dp, "Type", "Lattice", {{"Lattice", ""}, {"Particle File", ""}});
+  setChoice(d, dp, "Type", "Lattice", {{"Lattice", ""}, {"Particle File", ""},
+            {"Exodus", "an Exodus II mesh: a particle per element at its centroid with its volume (docs/exodus.md)"}});
   d.set("Dimension", 2, "1, 2 or 3; every vector key (corners, points, centres, load values) then takes exactly this many entries (an absent key's 3-entry default counts only its first Dimension entries)");
   setVector(d, dp, "Lower Corner", arr<double>({0, 0, 0}), "Lattice: lower corner of the body", Length::Dim);
   setVector(d, dp, "Upper Corner", arr<double>({1, 1, 1}), "Lattice: upper corner of the body", Length::Dim);
   setVector(d, dp, "Particles", arr<int>({}),
             "Lattice: particles per axis, each >= 1, at most " + lim + " lattice sites in all with the fictitious layers; or give Spacing",
             Length::DimOrEmpty);
-  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing");
+  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing; Exodus: nominal spacing (0: the median element's edge, volume^(1/3), 2D (area)^(1/2))");
   d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (1 <= factor <= " + number(kMaxHorizonFactor) + ")");
-  d.set("Horizon", 0.0, "Particle File: absolute horizon (overrides Horizon Factor when > 0; spacing <= horizon <= " + number(kMaxHorizonFactor) + " x spacing)");
+  d.set("Horizon", 0.0, "Particle File, Exodus: absolute horizon (overrides Horizon Factor when > 0; spacing <= horizon <= " + number(kMaxHorizonFactor) + " x spacing)");
   d.set("Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A");
   std::vector<std::string> sides;
   for (const auto& c : sideChoices()) sides.push_back(c.value);
   choiceTable()["Discretization/Fictitious Sides"] = sides;
   d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides));
   d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
+  d.set("Mesh File", "", "Exodus: path (relative to the scene) of the Exodus II mesh (hex, tet, wedge, sphere in 3D; quad, tri, sphere in 2D, areas x Thickness)");
   d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing, in [0, 1)");
   d.set("Jitter Seed", 12345, "seed of the jitter (>= 0)");
   d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
@@ -342,7 +350,9 @@ Teuchos::RCP<ParameterList> buildSchema() {
             "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: ");
   so.set("Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)");
   auto& o = s->sublist("Output", false, "what is written");
-  o.set("VTK", true, "write .vtu/.pvtu fields");
+  o.set("VTK", true, "write .vtu/.pvtu fields (when Format is VTU or Both)");
+  setChoice(o, "Output", "Format", "VTU", {{"VTU", "fields.pvtu and fields_<rank>.vtu of the last state"},
+            {"Exodus", "fields.e: every converged load step as an Exodus II time step (docs/exodus.md)"}, {"Both", "VTU and Exodus"}});
   o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
   // For 'perinox schema': the keys of one entry of each named sublist (nothing reads them).
   for (const auto& [sub, what] : namedSublists()) {
@@ -727,6 +737,42 @@ std::string position(const Discretization& d, int p) {
 }
 
 /// The int at path/key, refused outside [lo, hi].
+/// The particles of a region of Type Node Set, Side Set (Exodus meshes) or Block (any
+/// discretisation), chosen by the set's or block's Name or Id.
+std::vector<int> meshSetRegion(const ExodusMesh& mesh, const Discretization& d, const std::string& dtype,
+                               const ParameterList& r, const std::string& region, const std::string& type,
+                               const std::string& file) {
+  const std::string key = "'Regions/" + region + "/";
+  const std::string name = r.get<std::string>("Name");
+  const int id = r.get<int>("Id");
+  if (id < -1) fail(file, key + "Id' must be >= 0 (or -1: none)");
+  if (name.empty() == (id == -1))
+    fail(file, "region '" + region + "' (Type = " + type + ") needs exactly one of Name and Id");
+  const std::string what = name.empty() ? "id " + std::to_string(id) : "name '" + name + "'";
+  if (type == "Block") {
+    int blockId = id;
+    if (!name.empty()) {
+      if (dtype != "Exodus") fail(file, key + "Name' names a block, but only Exodus blocks have names; give its Id");
+      auto it = std::find_if(mesh.blocks.begin(), mesh.blocks.end(), [&](const MeshBlock& b) { return b.name == name; });
+      if (it == mesh.blocks.end()) fail(file, "region '" + region + "': the mesh has no element block named '" + name + "'");
+      blockId = it->id;
+    }
+    std::vector<int> ids;
+    for (int i = 0; i < d.size(); ++i)
+      if (d.block[i] == blockId && !d.fictitious[i]) ids.push_back(i);
+    if (ids.empty()) fail(file, "region '" + region + "': no particle is in block " + std::to_string(blockId));
+    return ids;
+  }
+  if (dtype != "Exodus") fail(file, "region '" + region + "' is a " + type + ", which needs 'Discretization/Type' = Exodus");
+  const auto& sets = type == "Node Set" ? mesh.nodeSets : mesh.sideSets;
+  for (const auto& s : sets)
+    if (name.empty() ? s.id == id : s.name == name) {
+      if (s.particles.empty()) fail(file, "region '" + region + "': the mesh's " + type + " with " + what + " is empty");
+      return s.particles;
+    }
+  fail(file, "region '" + region + "': the mesh has no " + type + " with " + what);
+}
+
 int intIn(const ParameterList& l, const std::string& path, const std::string& key, int lo, int hi, const std::string& file) {
   const int v = l.get<int>(key);
   if (v < lo || v > hi)
@@ -845,6 +891,16 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   const std::string dtype = dl.get<std::string>("Type");
   const double thickness = dl.get<double>("Thickness");
   if (!(thickness > 0)) fail(file, "'Discretization/Thickness' must be positive");
+  ExodusMesh mesh;  // Type = Exodus: the mesh's blocks and sets, for the regions below
+  auto relativeToScene = [&](std::string path) {
+    if (!path.empty() && path[0] != '/') {
+      const auto slash = file.rfind('/');
+      if (slash != std::string::npos) path = file.substr(0, slash + 1) + path;
+    }
+    return path;
+  };
+  if (dtype != "Exodus" && !dl.get<std::string>("Mesh File").empty())
+    fail(file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
   try {
     if (dtype == "Lattice") {
       LatticeSpec ls;
@@ -909,13 +965,10 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
         ls.holes.push_back(hole);
       }
       problem->disc = buildLattice(ls);
-    } else {  // Particle File
+    } else if (dtype == "Particle File") {
       std::string path = dl.get<std::string>("Particle File");
       if (path.empty()) fail(file, "'Discretization/Particle File' is required when Type = Particle File");
-      if (path[0] != '/') {
-        const auto slash = file.rfind('/');
-        if (slash != std::string::npos) path = file.substr(0, slash + 1) + path;
-      }
+      path = relativeToScene(path);
       const double spacing = dl.get<double>("Spacing");
       double horizon = dl.get<double>("Horizon");
       if (!(spacing > 0)) fail(file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
@@ -928,6 +981,30 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
         fail(file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
                        number(spacing) + " to " + number(kMaxHorizonFactor * spacing) + ")");
       problem->disc = readParticleFile(path, dim, horizon, spacing, thickness);
+    } else if (dtype == "Exodus") {
+      const std::string path = relativeToScene(dl.get<std::string>("Mesh File"));
+      if (path.empty()) fail(file, "'Discretization/Mesh File' is required when Type = Exodus");
+      if (!exodusAvailable())
+        fail(file, "'Discretization/Type' = Exodus, but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
+      if (!dl.get<Array<std::string>>("Fictitious Sides").empty())
+        fail(file, "'Discretization/Fictitious Sides' is for lattices; an Exodus mesh's boundary conditions act on its node sets");
+      const double given = dl.get<double>("Spacing");
+      double horizon = dl.get<double>("Horizon");
+      if (given < 0) fail(file, "'Discretization/Spacing' must be positive (or 0: from the mesh)");
+      if (horizon < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
+      mesh = readExodusMesh(path, dim, thickness);
+      Discretization& md = mesh.disc;
+      if (given > 0) md.dx = given;
+      if (horizon == 0) {
+        checkHorizonFactor(dl.get<double>("Horizon Factor"), file);
+        horizon = dl.get<double>("Horizon Factor") * md.dx;
+      }
+      if (!(horizon >= md.dx && horizon <= kMaxHorizonFactor * md.dx))
+        fail(file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
+                       number(md.dx) + " to " + number(kMaxHorizonFactor * md.dx) + (given > 0 ? ")" : ", the spacing taken from the mesh)"));
+      md.horizon = horizon;
+      buildFamilies(md);
+      problem->disc = md;
     }
   } catch (const std::invalid_argument& e) {
     fail(file, std::string("Discretization: ") + e.what());
@@ -1040,6 +1117,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     } else if (type == "Nearest") {
       const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
       if (p >= 0) ids.push_back(p);
+    } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
+      ids = meshSetRegion(mesh, d, dtype, r, name, type, file);
     } else {  // All Fictitious or All Real
       for (int i = 0; i < d.size(); ++i)
         if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
@@ -1308,6 +1387,9 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
 
   // --- output ---
   sc.output.vtk = pl.sublist("Output").get<bool>("VTK");
+  sc.output.format = pl.sublist("Output").get<std::string>("Format");
+  if (sc.output.format != "VTU" && !exodusAvailable())
+    fail(file, "'Output/Format' = " + sc.output.format + ", but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
   sc.output.plots = pl.sublist("Output").get<bool>("Plots");
 
   sc.problem = problem;

@@ -85,7 +85,8 @@ struct SolverSettings {
 };
 
 struct OutputSettings {
-  bool vtk = true;
+  bool vtk = true;                   // VTU files (with format VTU or Both)
+  std::string format = "VTU";        // "VTU", "Exodus" (fields.e, every converged step) or "Both"
   bool plots = true;
 };
 

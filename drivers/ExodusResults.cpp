@@ -1,0 +1,120 @@
+// Exodus II results per converged step (drivers/ExodusResults.hpp, docs/exodus.md).
+#include "ExodusResults.hpp"
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <mpi.h>
+
+#include <stdexcept>
+
+#include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/io/ExodusOutput.hpp"
+
+namespace perinox {
+
+namespace {
+
+// Per particle: displacement (3), Cauchy stress (6: xx yy zz xy yz zx), damage.
+const std::vector<std::string>& nodalNames() {
+  static const std::vector<std::string> n{"displacement_x", "displacement_y", "displacement_z", "stress_xx", "stress_yy",
+                                          "stress_zz",      "stress_xy",      "stress_yz",      "stress_zx", "damage"};
+  return n;
+}
+constexpr int kPerParticle = 10;
+
+/// Runs f on rank 0; if it throws, every rank throws the same sentence (no rank is left waiting
+/// in a collective).
+template <class F>
+void onRankZero(const Teuchos::Comm<int>& comm, F&& f) {
+  std::string msg;
+  if (comm.getRank() == 0) try {
+      f();
+    } catch (const std::exception& e) {
+      msg = e.what();
+      if (msg.empty()) msg = "unknown error";
+    }
+  int length = static_cast<int>(msg.size());
+  Teuchos::broadcast(comm, 0, Teuchos::outArg(length));
+  if (length == 0) return;
+  msg.resize(length);
+  Teuchos::broadcast(comm, 0, length, msg.data());
+  throw std::runtime_error("writing the Exodus results failed: " + msg);
+}
+
+MPI_Comm rawComm(const Teuchos::Comm<int>& comm) {
+  const auto* mpi = dynamic_cast<const Teuchos::MpiComm<int>*>(&comm);
+  if (!mpi) throw std::logic_error("ExodusRecorder needs an MPI communicator");
+  return (*mpi->getRawMpiComm())();
+}
+
+}  // namespace
+
+ExodusRecorder::ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scene, const RunResult& res,
+                               const std::string& dir)
+    : ev_(ev), scene_(scene), res_(res) {
+  const auto& d = ev.problem().disc;
+  std::vector<std::string> globals{"load_factor"};
+  static const char* axis[3] = {"x", "y", "z"};
+  for (const auto& p : scene.probes) {
+    if (p.quantity == "Profile") continue;
+    for (int c = 0; c < d.dim; ++c)
+      globals.push_back((p.quantity == "Reaction" ? "reaction " : "displacement ") + p.name + " " + axis[c]);
+  }
+  onRankZero(*ev.comm(), [&] {
+    writer_ = std::make_unique<ExodusWriter>(dir + "/fields.e", d.dim, d.thickness, d.X, d.volume, d.block, scene.regions,
+                                             nodalNames(), globals);
+  });
+}
+
+ExodusRecorder::~ExodusRecorder() = default;
+
+void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
+  const auto& comm = *ev_.comm();
+  const int D = ev_.problem().dim();
+  const auto u = ev_.ownedDisplacements(x);
+  const auto outs = ev_.ownedOutputs(x);
+  const std::vector<double> damage = ev_.problem().damage ? ev_.ownedDamage() : std::vector<double>(outs.size(), 0.0);
+  const int n = static_cast<int>(ev_.endOwned() - ev_.firstOwned());
+  std::vector<double> mine(static_cast<std::size_t>(n) * kPerParticle, 0.0);
+  for (int i = 0; i < n; ++i) {
+    double* v = &mine[static_cast<std::size_t>(i) * kPerParticle];
+    for (int c = 0; c < D; ++c) v[c] = u[static_cast<std::size_t>(i) * D + c];
+    const auto& s = outs[i].cauchy;
+    v[3] = s(0, 0), v[4] = s(1, 1), v[5] = s(2, 2), v[6] = s(0, 1), v[7] = s(1, 2), v[8] = s(2, 0);
+    v[9] = damage[i];
+  }
+  // Owned particles are contiguous id ranges in rank order: rank 0 receives them in id order.
+  // (MPI itself: Teuchos::gatherv has no case for double in Trilinos 13.2, docs/exodus.md.)
+  const int ranks = comm.getSize();
+  const int count = static_cast<int>(mine.size());
+  std::vector<int> counts(ranks, 0), displs(ranks, 0);
+  const MPI_Comm raw = rawComm(comm);
+  MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, raw);
+  int total = 0;
+  for (int r = 0; r < ranks; ++r) displs[r] = total, total += counts[r];
+  std::vector<double> all(comm.getRank() == 0 ? total : 0);
+  MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, raw);
+  std::vector<double> globals{lambda};
+  for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
+    if (scene_.probes[k].quantity == "Profile") continue;
+    const auto& hist = k < res_.probes.size() ? res_.probes[k].second : decltype(res_.probes[k].second){};
+    for (int c = 0; c < D; ++c)
+      globals.push_back(!hist.empty() && static_cast<int>(hist.back().second.size()) > c ? hist.back().second[c] : 0.0);
+  }
+  onRankZero(comm, [&] {
+    const std::size_t np = static_cast<std::size_t>(total / kPerParticle);
+    std::vector<std::vector<double>> nodal(kPerParticle, std::vector<double>(np));
+    for (std::size_t p = 0; p < np; ++p)
+      for (int v = 0; v < kPerParticle; ++v) nodal[v][p] = all[p * kPerParticle + v];
+    writer_->writeStep(lambda, nodal, globals);
+  });
+  ++steps_;
+}
+
+void ExodusRecorder::close() {
+  onRankZero(*ev_.comm(), [&] {
+    if (writer_) writer_->close();
+  });
+}
+
+}  // namespace perinox

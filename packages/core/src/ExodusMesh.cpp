@@ -1,0 +1,431 @@
+// Exodus II meshes as particles (docs/exodus.md). The geometry (centroids and exact volumes of
+// linear elements) is plain C++; the file is read through the Exodus II C API (6.02's classic
+// calls: ex_get_init, ex_get_elem_block, ex_get_elem_conn, ...), only when perinox was built
+// with it (PERINOX_HAVE_EXODUS).
+#include "perinox/core/ExodusMesh.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#ifdef PERINOX_HAVE_EXODUS
+#include <exodusII.h>
+#endif
+
+namespace perinox {
+
+bool exodusAvailable() {
+#ifdef PERINOX_HAVE_EXODUS
+  return true;
+#else
+  return false;
+#endif
+}
+
+#ifdef PERINOX_HAVE_EXODUS
+
+namespace {
+
+enum class Shape { Hex, Tet, Wedge, Quad, Tri, Sphere, Unsupported };
+
+/// Element family from the file's type name (case-insensitive) and its node count. Higher-order
+/// elements keep their corners first (Exodus ordering), so they are read through those.
+Shape shapeOf(const std::string& type, int nodes, int& corners) {
+  std::string t;
+  for (char c : type) t += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  auto starts = [&](const char* p) { return t.rfind(p, 0) == 0; };
+  auto allowed = [&](std::initializer_list<int> counts) {
+    return std::find(counts.begin(), counts.end(), nodes) != counts.end();
+  };
+  if (starts("HEX") && allowed({8, 20, 27})) return corners = 8, Shape::Hex;
+  if (starts("TET") && allowed({4, 8, 10, 11, 14, 15})) return corners = 4, Shape::Tet;
+  if (starts("WEDGE") && allowed({6, 15, 16, 18, 20, 21})) return corners = 6, Shape::Wedge;
+  if (starts("QUAD") && allowed({4, 5, 8, 9})) return corners = 4, Shape::Quad;
+  if (starts("TRI") && !starts("TRISHELL") && allowed({3, 4, 6, 7})) return corners = 3, Shape::Tri;
+  if (starts("SPHERE") && nodes == 1) return corners = 1, Shape::Sphere;
+  return Shape::Unsupported;
+}
+
+bool threeD(Shape s) { return s == Shape::Hex || s == Shape::Tet || s == Shape::Wedge; }
+
+/// Position and volume of one element from its corner nodes. The position is the mean of the
+/// corners (as Peridigm places its particles, and as shared/benchmarks/tensile_bar_points.txt
+/// has them; it is the centroid for tets, triangles and parallelepipeds, and differs from the
+/// volume centroid of a general hex, wedge or quad); the volume is exact for the element's
+/// (tri)linear shape. ok = false when the Jacobian
+/// determinant is not positive somewhere it is sampled (3D: at every corner and quadrature
+/// point; 2D: of one sign at every corner and point, as either node order is a valid
+/// orientation of a planar element) or the volume is not positive.
+struct Measure {
+  Vec3 centroid = Vec3::Zero();
+  double volume = 0.0;
+  bool ok = true;
+};
+
+// Gauss-Legendre, 2 points on [-1, 1]: exact for a trilinear map's Jacobian determinant
+// (degree <= 2 per variable), so the volume is exact.
+const double kGauss[2] = {-1.0 / std::sqrt(3.0), 1.0 / std::sqrt(3.0)};
+
+Measure hexMeasure(const std::array<Vec3, 8>& x) {
+  // Exodus/Patran hex: nodes 0-3 the bottom face counter-clockwise, 4-7 the top one.
+  static const double s[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                 {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+  Measure m;
+  auto at = [&](double r, double t, double u) {  // det J of the trilinear map at (r, t, u)
+    Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+    for (int a = 0; a < 8; ++a) {
+      const double fr = 1 + s[a][0] * r, ft = 1 + s[a][1] * t, fu = 1 + s[a][2] * u;
+      J.col(0) += s[a][0] * ft * fu / 8 * x[a];
+      J.col(1) += fr * s[a][1] * fu / 8 * x[a];
+      J.col(2) += fr * ft * s[a][2] / 8 * x[a];
+    }
+    return J.determinant();
+  };
+  for (int a = 0; a < 8; ++a)
+    if (!(at(s[a][0], s[a][1], s[a][2]) > 0)) m.ok = false;
+  for (double r : kGauss)
+    for (double t : kGauss)
+      for (double u : kGauss) {
+        const double det = at(r, t, u);
+        if (!(det > 0)) m.ok = false;
+        m.volume += det;  // weights 1
+      }
+  for (const Vec3& p : x) m.centroid += p / 8;
+  m.ok = m.ok && m.volume > 0;
+  return m;
+}
+
+Measure tetMeasure(const std::array<Vec3, 4>& x) {
+  Measure m;
+  m.volume = (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]) / 6;
+  m.centroid = (x[0] + x[1] + x[2] + x[3]) / 4;
+  m.ok = m.volume > 0;
+  return m;
+}
+
+Measure wedgeMeasure(const std::array<Vec3, 6>& x) {
+  // Nodes 0-2 the bottom triangle, 3-5 the top one above them. Map: triangle coordinates (r, t)
+  // times a linear coordinate u in [-1, 1]. The Jacobian determinant has degree 1 in (r, t) and 2
+  // in u: the 3-point degree-2 triangle rule by 2-point Gauss integrates it exactly.
+  Measure m;
+  auto at = [&](double r, double t, double u) {  // det J at (r, t, u)
+    const double L[3] = {1 - r - t, r, t};
+    const double dr[3] = {-1, 1, 0}, dt[3] = {-1, 0, 1};
+    Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+    for (int a = 0; a < 3; ++a)
+      for (int lvl = 0; lvl < 2; ++lvl) {
+        const double f = lvl == 0 ? (1 - u) / 2 : (1 + u) / 2, df = lvl == 0 ? -0.5 : 0.5;
+        const Vec3& p = x[a + 3 * lvl];
+        J.col(0) += dr[a] * f * p;
+        J.col(1) += dt[a] * f * p;
+        J.col(2) += L[a] * df * p;
+      }
+    return J.determinant();
+  };
+  static const double corner[6][3] = {{0, 0, -1}, {1, 0, -1}, {0, 1, -1}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  for (const auto& c : corner)
+    if (!(at(c[0], c[1], c[2]) > 0)) m.ok = false;
+  static const double tri[3][2] = {{1.0 / 6, 1.0 / 6}, {2.0 / 3, 1.0 / 6}, {1.0 / 6, 2.0 / 3}};
+  for (const auto& q : tri)
+    for (double u : kGauss) {
+      const double w = 1.0 / 6;  // triangle weight (area 1/2 over 3 points) times the Gauss weight 1
+      const double det = at(q[0], q[1], u);
+      if (!(det > 0)) m.ok = false;
+      m.volume += w * det;
+    }
+  for (const Vec3& p : x) m.centroid += p / 6;
+  m.ok = m.ok && m.volume > 0;
+  return m;
+}
+
+/// 2D: area in the x-y plane (either orientation), times nothing: the caller multiplies by the
+/// thickness.
+Measure quadMeasure(const std::array<Vec3, 4>& x) {
+  static const double s[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  Measure m;
+  auto at = [&](double r, double t) {  // det J of the bilinear map at (r, t)
+    Eigen::Matrix2d J = Eigen::Matrix2d::Zero();
+    for (int a = 0; a < 4; ++a) {
+      const double fr = 1 + s[a][0] * r, ft = 1 + s[a][1] * t;
+      J.col(0) += s[a][0] * ft / 4 * x[a].head<2>();
+      J.col(1) += fr * s[a][1] / 4 * x[a].head<2>();
+    }
+    return J.determinant();
+  };
+  int positive = 0, negative = 0;
+  for (const auto& c : s) {
+    const double det = at(c[0], c[1]);
+    positive += det > 0;
+    negative += det < 0;
+  }
+  double signedArea = 0;
+  for (double r : kGauss)
+    for (double t : kGauss) {
+      const double det = at(r, t);
+      positive += det > 0;
+      negative += det < 0;
+      signedArea += det;
+    }
+  m.ok = (positive == 8 || negative == 8) && signedArea != 0;
+  for (const Vec3& p : x) m.centroid += p / 4;
+  m.volume = std::abs(signedArea);
+  return m;
+}
+
+Measure triMeasure(const std::array<Vec3, 3>& x) {
+  Measure m;
+  const Eigen::Vector2d a = (x[1] - x[0]).head<2>(), b = (x[2] - x[0]).head<2>();
+  m.volume = std::abs(a[0] * b[1] - a[1] * b[0]) / 2;
+  m.centroid = (x[0] + x[1] + x[2]) / 3;
+  m.ok = m.volume > 0;
+  return m;
+}
+
+}  // namespace
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) { throw std::runtime_error(path + ": " + what); }
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+/// An open Exodus file, closed on every way out.
+struct ExodusFile {
+  int id = -1;
+  ~ExodusFile() {
+    if (id >= 0) ex_close(id);
+  }
+};
+
+std::string entityName(int exo, ex_entity_type type, int id) {
+  char buf[MAX_STR_LENGTH + 1 + 256] = {0};  // names longer than 32 characters are cut by the library
+  if (ex_get_name(exo, type, id, buf) < 0) return "";
+  std::string s(buf);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
+  return s;
+}
+
+std::string blockLabel(int id, const std::string& name) {
+  const bool given = !name.empty() && name != "block_" + std::to_string(id);
+  return "element block " + std::to_string(id) + (given ? " ('" + name + "')" : "");
+}
+
+}  // namespace
+
+ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
+  if (dim != 2 && dim != 3) fail(path, "Exodus meshes are for 2D and 3D scenes ('Discretization/Dimension' = 2 or 3)");
+  if (!(thickness > 0) || !std::isfinite(thickness)) fail(path, "the thickness must be positive and finite");
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) fail(path, "cannot open the Exodus mesh for reading (no such file, or not readable)");
+    char magic[4] = {0, 0, 0, 0};
+    probe.read(magic, 4);
+    // netCDF classic/64-bit offset ("CDF\001", "CDF\002", "CDF\005") or netCDF-4 on HDF5 ("\211HDF").
+    const bool cdf = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
+    const bool hdf = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
+    if (!cdf && !hdf) fail(path, "is not an Exodus II file (not a netCDF file)");
+  }
+  ex_opts(0);  // no messages on stderr and no abort: every failure becomes this reader's sentence
+  int cpuWordSize = sizeof(double), ioWordSize = 0;
+  float version = 0;
+  ExodusFile f;
+  f.id = ex_open(path.c_str(), EX_READ, &cpuWordSize, &ioWordSize, &version);
+  if (f.id < 0) fail(path, "is not an Exodus II file (the Exodus library cannot open it)");
+  const int exo = f.id;
+  // Names longer than Exodus' default 32 characters come back whole only when asked for.
+  const int usedNameLength = static_cast<int>(ex_inquire_int(exo, EX_INQ_DB_MAX_USED_NAME_LENGTH));
+  if (usedNameLength > MAX_STR_LENGTH) ex_set_max_name_length(exo, std::min(usedNameLength, 256));
+
+  char title[MAX_LINE_LENGTH + 1] = {0};
+  int numDim = 0, numNodes = 0, numElem = 0, numBlocks = 0, numNodeSets = 0, numSideSets = 0;
+  if (ex_get_init(exo, title, &numDim, &numNodes, &numElem, &numBlocks, &numNodeSets, &numSideSets) < 0)
+    fail(path, "is not an Exodus II file (no Exodus header)");
+  if (numBlocks <= 0) fail(path, "has no element blocks");
+  if (numElem <= 0) fail(path, "has no elements");
+  if (numDim < 2 || numDim > 3) fail(path, "has " + std::to_string(numDim) + "-dimensional coordinates (2 or 3 are read)");
+  if (dim == 3 && numDim < 3) fail(path, "is a 2D mesh but the scene is 3D ('Discretization/Dimension' = 3)");
+
+  std::vector<double> cx(numNodes, 0.0), cy(numNodes, 0.0), cz(numNodes, 0.0);
+  if (numNodes > 0 && ex_get_coord(exo, cx.data(), cy.data(), numDim == 3 ? cz.data() : nullptr) < 0)
+    fail(path, "has unreadable node coordinates");
+  for (int i = 0; i < numNodes; ++i)
+    if (!std::isfinite(cx[i]) || !std::isfinite(cy[i]) || !std::isfinite(cz[i]))
+      fail(path, "node " + std::to_string(i + 1) + " has a coordinate that is not a finite number");
+  if (dim == 2)
+    for (double& z : cz) z = 0;  // 2D: the x-y plane (as particle files do)
+
+  std::vector<int> blockIds(numBlocks);
+  if (ex_get_elem_blk_ids(exo, blockIds.data()) < 0) fail(path, "has unreadable element block ids");
+
+  ExodusMesh mesh;
+  Discretization& d = mesh.disc;
+  d.dim = dim;
+  d.thickness = thickness;
+  // The elements of each node (0-based element = particle ids), for the node sets.
+  std::vector<std::vector<int>> elementsOfNode(numNodes);
+  int elem = 0;  // running element number = particle id (file order, block by block)
+  for (int b = 0; b < numBlocks; ++b) {
+    MeshBlock blk;
+    blk.id = blockIds[b];
+    blk.name = entityName(exo, EX_ELEM_BLOCK, blk.id);
+    if (blk.name.empty()) blk.name = "block_" + std::to_string(blk.id);  // Peridigm's name for an unnamed block
+    char type[MAX_STR_LENGTH + 1] = {0};
+    int count = 0, nodesPer = 0, attrs = 0;
+    if (ex_get_elem_block(exo, blk.id, type, &count, &nodesPer, &attrs) < 0)
+      fail(path, "has an unreadable " + blockLabel(blk.id, blk.name));
+    blk.elementType = type;
+    blk.elements = count;
+    const std::string where = blockLabel(blk.id, blk.name);
+    if (count == 0) {
+      mesh.blocks.push_back(blk);
+      continue;
+    }
+    int corners = 0;
+    const Shape shape = shapeOf(blk.elementType, nodesPer, corners);
+    if (shape == Shape::Unsupported)
+      fail(path, where + " has elements of type '" + blk.elementType + "' with " + std::to_string(nodesPer) +
+                     " nodes, which perinox does not read (hex, tet, wedge and sphere in 3D; quad, tri and sphere in 2D)");
+    if (dim == 3 && (shape == Shape::Quad || shape == Shape::Tri))
+      fail(path, where + " has 2D elements ('" + blk.elementType + "') but the scene is 3D ('Discretization/Dimension' = 3)");
+    if (dim == 2 && threeD(shape))
+      fail(path, where + " has 3D elements ('" + blk.elementType + "') but the scene is 2D ('Discretization/Dimension' = 2)");
+    std::vector<int> conn(static_cast<std::size_t>(count) * nodesPer);
+    if (ex_get_elem_conn(exo, blk.id, conn.data()) < 0) fail(path, "has unreadable connectivity in " + where);
+    std::vector<double> attr;
+    if (shape == Shape::Sphere) {
+      // Peridigm's rule: attribute 1 is the sphere's radius, attribute 2 its volume.
+      if (attrs < 2)
+        fail(path, where + " has sphere elements with " + std::to_string(attrs) +
+                       " attribute(s); the volume is read from the second attribute (radius, volume)");
+      attr.resize(static_cast<std::size_t>(count) * attrs);
+      if (ex_get_elem_attr(exo, blk.id, attr.data()) < 0) fail(path, "has unreadable sphere attributes in " + where);
+    }
+    for (int e = 0; e < count; ++e, ++elem) {
+      const std::string element = "element " + std::to_string(elem + 1) + " of " + where;
+      std::array<Vec3, 8> x;
+      for (int a = 0; a < nodesPer; ++a) {
+        const int node = conn[static_cast<std::size_t>(e) * nodesPer + a];
+        if (node < 1 || node > numNodes)
+          fail(path, element + " names node " + std::to_string(node) + ", but the mesh has " + std::to_string(numNodes) + " nodes");
+        if (a < corners) x[a] = Vec3(cx[node - 1], cy[node - 1], cz[node - 1]);
+        auto& list = elementsOfNode[node - 1];
+        if (list.empty() || list.back() != elem) list.push_back(elem);
+      }
+      Measure m;
+      switch (shape) {
+        case Shape::Hex: m = hexMeasure(x); break;
+        case Shape::Tet: m = tetMeasure({x[0], x[1], x[2], x[3]}); break;
+        case Shape::Wedge: m = wedgeMeasure({x[0], x[1], x[2], x[3], x[4], x[5]}); break;
+        case Shape::Quad: m = quadMeasure({x[0], x[1], x[2], x[3]}); break;
+        case Shape::Tri: m = triMeasure({x[0], x[1], x[2]}); break;
+        default:  // sphere
+          m.centroid = x[0];
+          m.volume = attr[static_cast<std::size_t>(e) * attrs + 1];
+          if (!(m.volume > 0) || !std::isfinite(m.volume))
+            fail(path, element + " is a sphere with volume " + num(m.volume) + " (its second attribute must be positive)");
+      }
+      if (!m.ok) {
+        if (m.volume == 0)
+          fail(path, element + " ('" + blk.elementType + "') has zero volume (degenerate: coincident or flat corners)");
+        fail(path, element + " ('" + blk.elementType + "') is inverted or degenerate (its Jacobian determinant is not positive everywhere: " +
+                       "check the node order)");
+      }
+      if (shape == Shape::Quad || shape == Shape::Tri) m.volume *= thickness;
+      if (dim == 2) m.centroid[2] = 0;
+      d.X.push_back(m.centroid);
+      d.volume.push_back(m.volume);
+      d.block.push_back(blk.id);
+    }
+    mesh.blocks.push_back(blk);
+  }
+  if (d.X.empty()) fail(path, "has no elements in its element blocks");
+  for (std::size_t i = 0; i < mesh.blocks.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (mesh.blocks[i].id == mesh.blocks[j].id) fail(path, "has two element blocks with id " + std::to_string(mesh.blocks[i].id));
+
+  // Node sets: the particles of the elements touching the set's nodes (Peridigm's rule).
+  if (numNodeSets > 0) {
+    std::vector<int> ids(numNodeSets);
+    if (ex_get_node_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable node set ids");
+    for (int id : ids) {
+      MeshSet set;
+      set.id = id;
+      set.name = entityName(exo, EX_NODE_SET, id);
+      if (set.name.empty()) set.name = "nodelist_" + std::to_string(id);  // Peridigm's name for an unnamed node set
+      int n = 0, df = 0;
+      if (ex_get_node_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
+      std::vector<int> nodes(n);
+      if (n > 0 && ex_get_node_set(exo, id, nodes.data()) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
+      for (int node : nodes) {
+        if (node < 1 || node > numNodes)
+          fail(path, "node set " + std::to_string(id) + " names node " + std::to_string(node) + ", but the mesh has " +
+                         std::to_string(numNodes) + " nodes");
+        for (int e : elementsOfNode[node - 1]) set.particles.push_back(e);
+      }
+      std::sort(set.particles.begin(), set.particles.end());
+      set.particles.erase(std::unique(set.particles.begin(), set.particles.end()), set.particles.end());
+      mesh.nodeSets.push_back(set);
+    }
+  }
+  // Side sets: the particles of the listed elements (Peridigm ignores side sets).
+  if (numSideSets > 0) {
+    std::vector<int> ids(numSideSets);
+    if (ex_get_side_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable side set ids");
+    for (int id : ids) {
+      MeshSet set;
+      set.id = id;
+      set.name = entityName(exo, EX_SIDE_SET, id);
+      int n = 0, df = 0;
+      if (ex_get_side_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable side set " + std::to_string(id));
+      std::vector<int> elems(n), sides(n);
+      if (n > 0 && ex_get_side_set(exo, id, elems.data(), sides.data()) < 0)
+        fail(path, "has an unreadable side set " + std::to_string(id));
+      for (int e : elems) {
+        if (e < 1 || e > d.size())
+          fail(path, "side set " + std::to_string(id) + " names element " + std::to_string(e) + ", but the mesh has " +
+                         std::to_string(d.size()) + " elements");
+        set.particles.push_back(e - 1);
+      }
+      std::sort(set.particles.begin(), set.particles.end());
+      set.particles.erase(std::unique(set.particles.begin(), set.particles.end()), set.particles.end());
+      mesh.sideSets.push_back(set);
+    }
+  }
+
+  const std::size_t n = d.X.size();
+  d.fictitious.assign(n, 0);
+  d.sideMask.assign(n, 0);
+  d.boxLower = d.X[0];
+  d.boxUpper = d.X[0];
+  for (const Vec3& x : d.X) {
+    d.boxLower = d.boxLower.cwiseMin(x);
+    d.boxUpper = d.boxUpper.cwiseMax(x);
+  }
+  // Nominal spacing: the median particle's edge (3D: volume^(1/3); 2D: (volume / h)^(1/2)).
+  std::vector<double> v(d.volume);
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  const double med = v[v.size() / 2];
+  d.dx = dim == 3 ? std::cbrt(med) : std::sqrt(med / thickness);
+  d.horizon = 0;
+  return mesh;
+}
+
+#else
+
+ExodusMesh readExodusMesh(const std::string& path, int, double) {
+  throw std::runtime_error(path + ": this perinox was built without Exodus II, so it cannot read Exodus meshes "
+                                  "(install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
+}
+
+#endif
+
+}  // namespace perinox

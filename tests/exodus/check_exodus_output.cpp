@@ -1,0 +1,227 @@
+// Checks a run's fields.e (Output/Format = Exodus or Both) with the Exodus C API against what
+// the run wrote otherwise:
+//   - one time step per converged load step of summary.json, time = the step's load factor;
+//   - the last time step equals fields.csv (every particle: positions, displacements, stresses,
+//     damage), to 1e-11 of each field's largest magnitude (fields.csv prints 12 significant
+//     digits: half a unit in the 12th is 5e-12 of a value);
+//   - at every time step, the mean displacement over the node set of each probe's region (the
+//     scene's regions are written as node sets) equals summary.json's probe value at that step,
+//     to 1e-12 of the probe's largest magnitude (both are doubles from the same state; the means
+//     differ only by summation order);
+//   - the element blocks hold every particle once, with the block ids given (--blocks), and
+//     read back as sphere elements their volumes sum to --volume (when given).
+//   - with --no-vtu, no VTU file was written (Output/Format = Exodus).
+//   usage: check_exodus_output DIR [--probe NAME=REGION]... [--blocks ID,ID...] [--volume V] [--no-vtu]
+#include <exodusII.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+int failures = 0;
+void fail(const std::string& m) {
+  std::cout << "CHECK FAILED: " << m << "\n";
+  ++failures;
+}
+
+std::string name(int exo, ex_entity_type t, int id) {
+  char buf[257] = {0};
+  ex_get_name(exo, t, id, buf);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << "usage: check_exodus_output DIR [--probe NAME=REGION]... [--blocks ID,...] [--volume V]\n";
+    return 2;
+  }
+  const std::string dir = argv[1];
+  std::map<std::string, std::string> probeRegion;
+  std::set<int> wantBlocks;
+  double wantVolume = -1;
+  for (int a = 2; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "--probe" && a + 1 < argc) {
+      const std::string v = argv[++a];
+      probeRegion[v.substr(0, v.find('='))] = v.substr(v.find('=') + 1);
+    } else if (arg == "--blocks" && a + 1 < argc) {
+      std::stringstream ss(argv[++a]);
+      std::string t;
+      while (std::getline(ss, t, ',')) wantBlocks.insert(std::stoi(t));
+    } else if (arg == "--no-vtu") {
+      if (std::ifstream(dir + "/fields.pvtu") || std::ifstream(dir + "/fields_0.vtu")) fail("VTU files were written");
+    } else if (arg == "--volume" && a + 1 < argc) {
+      wantVolume = std::stod(argv[++a]);
+    } else {
+      std::cerr << "unknown argument " << arg << "\n";
+      return 2;
+    }
+  }
+  if (std::ifstream(dir + "/fields.e.tmp") || std::ifstream(dir + ".partial")) fail("a partial Exodus file or folder is left");
+  int cpu = sizeof(double), io = 0;
+  float version = 0;
+  ex_opts(0);
+  const int exo = ex_open((dir + "/fields.e").c_str(), EX_READ, &cpu, &io, &version);
+  if (exo < 0) {
+    fail("cannot open " + dir + "/fields.e");
+    return 1;
+  }
+  ex_set_max_name_length(exo, 80);  // the writer's name length (region names beyond 32 characters)
+  char title[MAX_LINE_LENGTH + 1];
+  int dim = 0, nodes = 0, elems = 0, nblocks = 0, nsets = 0, nside = 0;
+  ex_get_init(exo, title, &dim, &nodes, &elems, &nblocks, &nsets, &nside);
+  std::vector<double> X(nodes), Y(nodes), Z(nodes, 0.0);
+  ex_get_coord(exo, X.data(), Y.data(), dim == 3 ? Z.data() : nullptr);
+
+  // Blocks: every particle once, as a sphere.
+  std::vector<int> ids(nblocks);
+  ex_get_elem_blk_ids(exo, ids.data());
+  std::vector<int> seen(nodes, 0);
+  double volume = 0;
+  for (int id : ids) {
+    char type[MAX_STR_LENGTH + 1];
+    int n = 0, per = 0, attrs = 0;
+    ex_get_elem_block(exo, id, type, &n, &per, &attrs);
+    if (std::string(type) != "SPHERE" || per != 1 || attrs != 2) fail("block " + std::to_string(id) + " is not a block of spheres");
+    std::vector<int> conn(n);
+    std::vector<double> attr(2 * n);
+    ex_get_elem_conn(exo, id, conn.data());
+    ex_get_elem_attr(exo, id, attr.data());
+    for (int e = 0; e < n; ++e) {
+      ++seen[conn[e] - 1];
+      volume += attr[2 * e + 1];
+    }
+    if (!wantBlocks.empty() && !wantBlocks.count(id)) fail("unexpected block id " + std::to_string(id));
+  }
+  for (int p = 0; p < nodes; ++p)
+    if (seen[p] != 1) fail("particle " + std::to_string(p) + " is in " + std::to_string(seen[p]) + " elements");
+  if (!wantBlocks.empty() && static_cast<std::size_t>(nblocks) != wantBlocks.size()) fail("wrong number of blocks");
+  if (wantVolume > 0 && std::abs(volume - wantVolume) > 1e-12 * wantVolume)
+    fail("the spheres' volumes sum to " + std::to_string(volume) + ", not " + std::to_string(wantVolume));
+
+  // Variables.
+  int nvars = 0;
+  ex_get_var_param(exo, "n", &nvars);
+  std::vector<std::string> varNames(nvars);
+  {
+    std::vector<std::vector<char>> buf(nvars, std::vector<char>(257, 0));
+    std::vector<char*> ptr;
+    for (auto& b : buf) ptr.push_back(b.data());
+    ex_get_var_names(exo, "n", nvars, ptr.data());
+    for (int v = 0; v < nvars; ++v) varNames[v] = ptr[v];
+  }
+  auto var = [&](const std::string& n) {
+    for (int v = 0; v < nvars; ++v)
+      if (varNames[v] == n) return v + 1;
+    fail("no nodal variable " + n);
+    return 0;
+  };
+  const int steps = static_cast<int>(ex_inquire_int(exo, EX_INQ_TIME));
+
+  std::ifstream sj(dir + "/summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(sj);
+  const auto& srec = summary.at("steps");
+  if (steps != static_cast<int>(srec.size()))
+    fail(std::to_string(steps) + " time steps in fields.e, " + std::to_string(srec.size()) + " converged steps in summary.json");
+  auto nodal = [&](int step, const std::string& n) {
+    std::vector<double> v(nodes);
+    ex_get_nodal_var(exo, step, var(n), nodes, v.data());
+    return v;
+  };
+
+  // Node sets by name.
+  std::map<std::string, std::vector<int>> sets;
+  std::vector<int> setIds(nsets);
+  if (nsets > 0) ex_get_node_set_ids(exo, setIds.data());
+  for (int id : setIds) {
+    int n = 0, df = 0;
+    ex_get_node_set_param(exo, id, &n, &df);
+    std::vector<int> list(n);
+    if (n > 0) ex_get_node_set(exo, id, list.data());
+    sets[name(exo, EX_NODE_SET, id)] = list;
+  }
+
+  const char* axes[3] = {"x", "y", "z"};
+  for (int s = 1; s <= steps && s <= static_cast<int>(srec.size()); ++s) {
+    double t = 0;
+    ex_get_time(exo, s, &t);
+    const double lf = srec[s - 1].at("load_factor");
+    if (std::abs(t - lf) > 1e-15) fail("time step " + std::to_string(s) + " has time " + std::to_string(t) + ", not the load factor");
+    for (const auto& [probe, region] : probeRegion) {
+      if (!sets.count(region)) {
+        fail("no node set named " + region);
+        continue;
+      }
+      const auto& hist = summary.at("probes").at(probe);
+      double big = 0;
+      for (const auto& h : hist)
+        for (double v : h.at("displacement")) big = std::max(big, std::abs(v));
+      const auto& want = hist.at(s - 1).at("displacement");
+      for (std::size_t c = 0; c < want.size(); ++c) {
+        const auto u = nodal(s, std::string("displacement_") + axes[c]);
+        double mean = 0;
+        for (int node : sets[region]) mean += u[node - 1];
+        mean /= static_cast<double>(sets[region].size());
+        if (std::abs(mean - want[c].get<double>()) > 1e-12 * big)
+          fail("step " + std::to_string(s) + ": probe " + probe + " component " + axes[c] + " is " + std::to_string(want[c].get<double>()) +
+               " in summary.json but " + std::to_string(mean) + " from fields.e");
+      }
+    }
+  }
+
+  // The last step against fields.csv: id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage.
+  std::ifstream csv(dir + "/fields.csv");
+  std::string line;
+  std::getline(csv, line);
+  const std::vector<std::string> cols{"", "", "", "", "displacement_x", "displacement_y", "displacement_z",
+                                      "stress_xx", "stress_yy", "stress_zz", "stress_xy", "", "damage"};
+  std::vector<std::vector<double>> last(cols.size());
+  for (std::size_t c = 0; c < cols.size(); ++c)
+    if (!cols[c].empty() && steps > 0) last[c] = nodal(steps, cols[c]);
+  std::vector<double> scale(cols.size(), 0.0);
+  for (std::size_t c = 0; c < cols.size(); ++c)
+    for (double v : last[c]) scale[c] = std::max(scale[c], std::abs(v));
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::stringstream ls(line);
+    std::vector<double> v;
+    std::string t;
+    while (std::getline(ls, t, ',')) v.push_back(std::stod(t));
+    if (v.size() != cols.size()) {
+      fail("bad fields.csv line: " + line);
+      continue;
+    }
+    const int p = static_cast<int>(v[0]);
+    if (p < 0 || p >= nodes) {
+      fail("fields.csv has particle " + std::to_string(p) + ", fields.e " + std::to_string(nodes));
+      continue;
+    }
+    ++rows;
+    const double pos[3] = {X[p], Y[p], Z[p]};
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(pos[a] - v[1 + a]) > 1e-11 * (std::abs(pos[a]) + 1e-300) + 1e-300 && std::abs(pos[a] - v[1 + a]) > 1e-11 * std::abs(v[1 + a]))
+        fail("particle " + std::to_string(p) + " position differs");
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      if (cols[c].empty()) continue;
+      if (std::abs(last[c][p] - v[c]) > 1e-11 * scale[c])
+        fail("particle " + std::to_string(p) + " " + cols[c] + ": fields.e " + std::to_string(last[c][p]) + ", fields.csv " + std::to_string(v[c]));
+    }
+  }
+  if (rows != nodes) fail(std::to_string(rows) + " rows in fields.csv, " + std::to_string(nodes) + " particles in fields.e");
+  ex_close(exo);
+  if (failures == 0)
+    std::cout << "fields.e: " << steps << " time steps, " << nodes << " particles in " << nblocks
+              << " block(s): equals fields.csv and summary.json\n";
+  return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,198 @@
+# Exodus II meshes in and results out (docs/exodus.md). Included by tests/CMakeLists.txt when
+# the Exodus library was found (scripts/setup.sh installs it, so CI always runs these).
+
+# The reader on self-written meshes (closed-form volumes, node sets), bad meshes, and Peridigm's
+# tensile_test.g against its particle file; on 1 and 3 ranks (each rank reads on its own).
+# the copy kept in the repository (from ../shared/benchmarks, with its licence), so CI runs it too
+set(PERINOX_TENSILE_DIR ${PROJECT_SOURCE_DIR}/validation/benchmarks/peridigm_tensile)
+get_filename_component(PERINOX_TENSILE_DIR ${PERINOX_TENSILE_DIR} ABSOLUTE)
+perinox_add_gtest(NAME io_exodus_mesh SOURCES exodus/test_exodus_mesh.cpp OWN_MAIN LIBS perinox_core MPI::MPI_CXX
+  NPS 1 3 LABELS unit)
+perinox_link_exodus(io_exodus_mesh)
+target_include_directories(io_exodus_mesh PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
+if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.g AND EXISTS ${PERINOX_TENSILE_DIR}/tensile_bar_points.txt)
+  target_compile_definitions(io_exodus_mesh PRIVATE PERINOX_TENSILE_DIR="${PERINOX_TENSILE_DIR}")
+else()
+  message(STATUS "perinox: ${PERINOX_TENSILE_DIR}/tensile_test.g not found: the tensile-test comparison is not built")
+endif()
+
+# The meshes (and their closed-form particle files) the driver runs below read, written by a
+# helper with the Exodus C API (tests/exodus/make_exodus_meshes.cpp), beside the test scenes so
+# that the scenes' relative 'Mesh File' and 'Particle File' paths resolve.
+set(EXO_DIR ${CMAKE_CURRENT_BINARY_DIR}/exodus_meshes)
+file(MAKE_DIRECTORY ${EXO_DIR})
+foreach(scene bar_exodus bar_points quad_exodus quad_points)
+  configure_file(${CMAKE_CURRENT_SOURCE_DIR}/exodus/${scene}.xml ${EXO_DIR}/${scene}.xml COPYONLY)
+endforeach()
+add_executable(make_exodus_meshes exodus/make_exodus_meshes.cpp)
+perinox_link_exodus(make_exodus_meshes)
+target_include_directories(make_exodus_meshes PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
+add_test(NAME exodus_meshes_setup COMMAND make_exodus_meshes ${EXO_DIR})
+set_tests_properties(exodus_meshes_setup PROPERTIES FIXTURES_SETUP exodus_meshes LABELS unit)
+
+# perinox_exodus_run(NAME <name> SCENE <scene in EXO_DIR> NP <n> [SETS ...]): the driver on a
+# test scene, which must converge; a fixture <name> for the comparisons.
+function(perinox_exodus_run)
+  cmake_parse_arguments(R "" "NAME;SCENE;NP" "SETS;CHECK" ${ARGN})
+  perinox_mpi_command(mpi ${R_NP})
+  set(cmd ${mpi} $<TARGET_FILE:perinox> run ${EXO_DIR}/${R_SCENE} --output ${PERINOX_TEST_OUT}/${R_NAME} --quiet)
+  foreach(s ${R_SETS})
+    list(APPEND cmd --set ${s})
+  endforeach()
+  add_test(NAME ${R_NAME} COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/${R_NAME} --converged ${R_CHECK} -- ${cmd})
+  set(labels unit)
+  if(R_NP GREATER 1)
+    list(APPEND labels mpi)
+  endif()
+  set_tests_properties(${R_NAME} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT=" LABELS "${labels}"
+    PROCESSORS ${R_NP} TIMEOUT 600 FIXTURES_REQUIRED exodus_meshes FIXTURES_SETUP ${R_NAME})
+endfunction()
+
+# Reading on 1 and 3 ranks: the bar (hex, two blocks, a node set by name, a side set by id, a block
+# by name) and the 2D plate (quads, thickness, node sets by name and id, a block by id) from Exodus give the probes of the same scenes on the
+# closed-form particle files, to 1e-12 (the particles agree to round-off: the meshes' coordinates
+# are multiples of 0.25 and 0.1, the volumes sums of 8 or 4 quadrature terms), and the 3-rank
+# runs the 1-rank ones to 1e-10 (the rank-independence bound of mpi_cantilever_compare).
+foreach(case bar quad)
+  perinox_exodus_run(NAME exodus_${case}_points SCENE ${case}_points.xml NP 1)
+  foreach(np 1 3)
+    perinox_exodus_run(NAME exodus_${case}_np${np} SCENE ${case}_exodus.xml NP ${np})
+  endforeach()
+  add_test(NAME exodus_${case}_equals_points COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_${case}_points ${PERINOX_TEST_OUT}/exodus_${case}_np1)
+  set_tests_properties(exodus_${case}_equals_points PROPERTIES LABELS unit
+    FIXTURES_REQUIRED "exodus_${case}_points;exodus_${case}_np1")
+  add_test(NAME exodus_${case}_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-10 ${PERINOX_TEST_OUT}/exodus_${case}_np1 ${PERINOX_TEST_OUT}/exodus_${case}_np3)
+  set_tests_properties(exodus_${case}_ranks_compare PROPERTIES LABELS mpi
+    FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_np3")
+endforeach()
+
+# Bad meshes and mesh regions: one sentence naming the file (and block and element), exit code 2,
+# nothing written.
+function(perinox_bad_mesh name scene message)
+  perinox_bad_input(${name} ${EXO_DIR}/${scene} "${message}" ${ARGN})
+  set_tests_properties(badinput_${name} PROPERTIES FIXTURES_REQUIRED exodus_meshes)
+endfunction()
+set(MF "Discretization/Mesh File")
+perinox_bad_mesh(exodus_inverted_hex bar_exodus.xml
+  "inverted.e: element 2 of element block 1 ('left part') ('HEX8') is inverted or degenerate" --set "${MF}=inverted.e")
+perinox_bad_mesh(exodus_flat_tet bar_exodus.xml
+  "flat_tet.e: element 1 of element block 1 ('TETRA') has zero volume" --set "${MF}=flat_tet.e")
+perinox_bad_mesh(exodus_pyramid bar_exodus.xml
+  "pyramid.e: element block 1 has elements of type 'PYRAMID5' with 5 nodes, which perinox does not read" --set "${MF}=pyramid.e")
+perinox_bad_mesh(exodus_no_blocks bar_exodus.xml "no_blocks.e: has no element blocks" --set "${MF}=no_blocks.e")
+perinox_bad_mesh(exodus_sphere_no_volume bar_exodus.xml
+  "sphere_no_volume.e: element block 1 has sphere elements with 1 attribute(s)" --set "${MF}=sphere_no_volume.e")
+perinox_bad_mesh(exodus_not_exodus bar_exodus.xml "not_exodus.e: is not an Exodus II file" --set "${MF}=not_exodus.e")
+perinox_bad_mesh(exodus_missing_file bar_exodus.xml "no_such_mesh.e: cannot open the Exodus mesh" --set "${MF}=no_such_mesh.e")
+perinox_bad_mesh(exodus_2d_mesh_3d_scene bar_exodus.xml "quad.e: is a 2D mesh but the scene is 3D" --set "${MF}=quad.e")
+perinox_bad_mesh(exodus_3d_mesh_2d_scene quad_exodus.xml
+  "bar.e: element block 1 ('left part') has 3D elements ('HEX8') but the scene is 2D" --set "${MF}=bar.e")
+perinox_bad_mesh(exodus_no_mesh_file bar_exodus.xml "'Discretization/Mesh File' is required when Type = Exodus" --set "${MF}=")
+perinox_bad_mesh(exodus_mesh_file_for_particles bar_points.xml "'Discretization/Mesh File' is for Type = Exodus" --set "${MF}=bar.e")
+perinox_bad_mesh(exodus_node_set_unknown bar_exodus.xml "region 'left': the mesh has no Node Set with name 'nope'"
+  --set "Regions/left/Name=nope")
+perinox_bad_mesh(exodus_node_set_id_unknown quad_exodus.xml "region 'right': the mesh has no Node Set with id 7"
+  --set "Regions/right/Id=7")
+perinox_bad_mesh(exodus_side_set_unknown bar_exodus.xml "region 'right': the mesh has no Side Set with id 2"
+  --set "Regions/right/Id=2")
+perinox_bad_mesh(exodus_name_and_id bar_exodus.xml "region 'left' (Type = Node Set) needs exactly one of Name and Id"
+  --set "Regions/left/Id=1")
+perinox_bad_mesh(exodus_node_set_on_particles bar_points.xml "region 'left' is a Node Set, which needs 'Discretization/Type' = Exodus"
+  --set "Regions/left/Type=Node Set" --set "Regions/left/Name=left")
+perinox_bad_mesh(exodus_block_unknown bar_exodus.xml "region 'second half': the mesh has no element block named 'middle'"
+  --set "Regions/second half/Name=middle")
+perinox_bad_mesh(block_empty bar_points.xml "region 'second half': no particle is in block 5"
+  --set "Regions/second half/Id=5")
+
+# Exodus results: the cantilever (xml/cantilever.xml, 4 load steps) with Output/Format = Both on
+# 1 rank (direct) and 3 ranks (gmres-ilu), and Exodus alone; fields.e read back with the Exodus
+# library (tests/exodus/check_exodus_output.cpp) must equal fields.csv at the last step and
+# summary.json's tip probe at every step (on 3 ranks: the gather to rank 0 put every rank's
+# particles in their place).
+find_package(nlohmann_json REQUIRED)
+add_executable(check_exodus_output exodus/check_exodus_output.cpp)
+perinox_link_exodus(check_exodus_output)
+target_link_libraries(check_exodus_output PRIVATE nlohmann_json::nlohmann_json)
+foreach(np 1 3)
+  set(preset direct)
+  if(np GREATER 1)
+    set(preset gmres-ilu)
+  endif()
+  foreach(format Both Exodus)
+    set(name exodus_output_cantilever_${format}_np${np})
+    perinox_run_test(NAME ${name} SCENE cantilever.xml NP ${np}
+      SETS "Output/Format=${format}" "Solver/Load Steps=4" "Solver/Linear Solver Preset=${preset}"
+      CHECK --converged FIXTURE_SETUP ${name} LABELS unit)
+    set(extra)
+    if(format STREQUAL "Exodus")
+      set(extra --no-vtu)
+    endif()
+    add_test(NAME ${name}_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/${name} --probe tip=tip --blocks 1 ${extra})
+    set_tests_properties(${name}_check PROPERTIES LABELS unit FIXTURES_REQUIRED ${name})
+  endforeach()
+endforeach()
+# Block structure kept: the two-block bar's fields.e has blocks 1 and 2, and its spheres' volumes
+# sum to the bar's volume, 4 x 1 x 1.
+perinox_exodus_run(NAME exodus_output_bar SCENE bar_exodus.xml NP 3 SETS "Output/Format=Exodus")
+add_test(NAME exodus_output_bar_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar
+  --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu)
+set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar)
+# Complete or absent: a bad mesh with Exodus output writes nothing.
+perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
+
+# tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers, and
+# perinox accepts all of it (mesh, node sets, conditions, the rigid-body check: the scene is built
+# before the run starts), stopping before any solve at a --restart folder that does not exist;
+# a deck it cannot translate is refused with one sentence.
+if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
+  set(PD_SCENE ${CMAKE_CURRENT_BINARY_DIR}/peridigm/tensile_test.xml)
+  add_test(NAME tools_peridigm_to_scene COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py
+    ${PERINOX_TENSILE_DIR}/tensile_test.yaml --out ${PD_SCENE})
+  set_tests_properties(tools_peridigm_to_scene PROPERTIES LABELS unit FIXTURES_SETUP peridigm_scene)
+  add_test(NAME tools_peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
+  set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_scene)
+  perinox_mpi_command(mpi1 1)
+  add_test(NAME tools_peridigm_scene_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_scene
+    --exit-code 2 --message "no state.json there (not a checkpoint)" --no-output --
+    ${mpi1} $<TARGET_FILE:perinox> run ${PD_SCENE} --restart ${CMAKE_CURRENT_BINARY_DIR}/peridigm/no-such-checkpoint
+    --output ${PERINOX_TEST_OUT}/peridigm_scene)
+  set_tests_properties(tools_peridigm_scene_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
+    FIXTURES_REQUIRED peridigm_scene)
+endif()
+add_test(NAME tools_peridigm_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
+  "is not of the form t (a + b x + c y + d z)" --
+  ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py ${CMAKE_CURRENT_SOURCE_DIR}/exodus/bad_deck.yaml
+  --out ${CMAKE_CURRENT_BINARY_DIR}/peridigm/bad_deck.xml)
+set_tests_properties(tools_peridigm_bad_deck PROPERTIES LABELS "unit;badinput")
+
+# Peridigm's tensile test run from its mesh and from its particle file (the same model): equal
+# probes. Opt-in (-DPERINOX_LONG_TESTS=ON, label "long"): each run solves 34 275 unknowns with a
+# horizon of 2.5 spacings, 45 s (mesh order) to over 10 minutes (the particle file's order, worse
+# for ILU) of one core. Tolerance 1e-7: the particle file holds positions and volumes to 5e-10
+# relative (10 printed digits), and each run's GMRES stops at 1e-12 of the residual in a different
+# particle order.
+option(PERINOX_LONG_TESTS "also register the long Exodus tests (the tensile test from mesh and particle file)" OFF)
+if(PERINOX_LONG_TESTS AND EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.g)
+  foreach(scene tensile_exodus tensile_points)
+    configure_file(${CMAKE_CURRENT_SOURCE_DIR}/exodus/${scene}.xml.in ${EXO_DIR}/${scene}.xml @ONLY)
+    perinox_exodus_run(NAME exodus_${scene} SCENE ${scene}.xml NP 1)
+    set_tests_properties(exodus_${scene} PROPERTIES LABELS long TIMEOUT 3600)
+  endforeach()
+  add_test(NAME exodus_tensile_mesh_equals_points COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-7 ${PERINOX_TEST_OUT}/exodus_tensile_points ${PERINOX_TEST_OUT}/exodus_tensile_exodus)
+  set_tests_properties(exodus_tensile_mesh_equals_points PROPERTIES LABELS long
+    FIXTURES_REQUIRED "exodus_tensile_exodus;exodus_tensile_points")
+endif()
+
+# Round trip: the bar's fields.e read back as a mesh of sphere elements (volume = second
+# attribute, the scene's regions as node sets, blocks block_1 and block_2) gives the bar's
+# particles, so the run on it equals the run on bar.e (to 1e-12 as above).
+perinox_exodus_run(NAME exodus_roundtrip_bar SCENE bar_exodus.xml NP 1
+  SETS "Discretization/Mesh File=${PERINOX_TEST_OUT}/exodus_output_bar/fields.e" "Regions/right/Type=Node Set"
+       "Regions/right/Id=-1" "Regions/right/Name=right" "Regions/second half/Name=block_2")
+set_property(TEST exodus_roundtrip_bar APPEND PROPERTY FIXTURES_REQUIRED exodus_output_bar)
+add_test(NAME exodus_roundtrip_bar_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_bar_np1 ${PERINOX_TEST_OUT}/exodus_roundtrip_bar)
+set_tests_properties(exodus_roundtrip_bar_compare PROPERTIES LABELS unit FIXTURES_REQUIRED "exodus_bar_np1;exodus_roundtrip_bar")
