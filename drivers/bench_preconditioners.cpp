@@ -28,7 +28,7 @@
 //   Ifpack2 Type      (Ifpack2) e.g. RILUK, RELAXATION
 //   Parameters        sublist handed to Ifpack2, MueLu or FROSch as it is
 //   Fine Smoother     optional sublist {Type (an Ifpack2 type), Parameters}: a smoother on the
-//                     assembled J around the preconditioner (two-stage: S, V, S; TwoStageOperator)
+//                     assembled J around the preconditioner (two-stage: S, V, S; the library's twoStageOperator)
 //   Build At          State (default) | Reference: the preconditioner's matrix at the unloaded
 //                     state (x = 0, load factor 0), as one kept from the start of a run would be
 //   Overlap           (FROSch) overlap in graph layers
@@ -68,6 +68,8 @@
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/Scene.hpp"
+#include "perinox/solver/AuxiliaryOperators.hpp"
+#include "perinox/solver/TwoStagePreconditioner.hpp"
 
 using namespace perinox;
 
@@ -111,73 +113,9 @@ class TimedOperator final : public OP {
   RCP<const Teuchos::Comm<int>> comm_;
 };
 
-/// Restricts an operator on the all-DOF map to the free DOFs: y_free = (M [x_free; 0])_free.
-class FreeRestriction final : public OP {
- public:
-  FreeRestriction(RCP<const OP> inner, RCP<const TMap> freeMap, std::vector<LO> freeToAll)
-      : inner_(inner), free_(freeMap), freeToAll_(std::move(freeToAll)) {}
-  RCP<const TMap> getDomainMap() const override { return free_; }
-  RCP<const TMap> getRangeMap() const override { return free_; }
-  void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
-    const size_t nv = X.getNumVectors();
-    if (xa_.is_null() || xa_->getNumVectors() != nv) {
-      xa_ = rcp(new MV(inner_->getDomainMap(), nv));
-      ya_ = rcp(new MV(inner_->getRangeMap(), nv));
-    }
-    xa_->putScalar(0.0);
-    for (size_t v = 0; v < nv; ++v) {
-      auto x = X.getData(v);
-      auto xa = xa_->getDataNonConst(v);
-      for (size_t k = 0; k < freeToAll_.size(); ++k) xa[freeToAll_[k]] = x[k];
-    }
-    inner_->apply(*xa_, *ya_, mode, 1.0, 0.0);
-    for (size_t v = 0; v < nv; ++v) {
-      auto ya = ya_->getData(v);
-      auto y = Y.getDataNonConst(v);
-      for (size_t k = 0; k < freeToAll_.size(); ++k)
-        y[k] = (beta == 0.0 ? 0.0 : beta * y[k]) + alpha * ya[freeToAll_[k]];
-    }
-  }
-
- private:
-  RCP<const OP> inner_;
-  RCP<const TMap> free_;
-  std::vector<LO> freeToAll_;
-  mutable RCP<MV> xa_, ya_;
-};
-
-/// Two-stage preconditioner: a smoother S on the operator J itself around a coarse solver V built
-/// from another matrix (symmetric multiplicative): y = S r; y += V (r - J y); y += S (r - J y).
-/// V carries the low frequencies (where an auxiliary operator is spectrally close to J), S the
-/// high ones (where it is not).
-class TwoStageOperator final : public OP {
- public:
-  TwoStageOperator(RCP<const OP> J, RCP<const OP> S, RCP<const OP> V) : J_(J), S_(S), V_(V) {}
-  RCP<const TMap> getDomainMap() const override { return J_->getDomainMap(); }
-  RCP<const TMap> getRangeMap() const override { return J_->getRangeMap(); }
-  void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
-    const size_t nv = X.getNumVectors();
-    if (y_.is_null() || y_->getNumVectors() != nv) {
-      y_ = rcp(new MV(X.getMap(), nv));
-      r_ = rcp(new MV(X.getMap(), nv));
-      d_ = rcp(new MV(X.getMap(), nv));
-    }
-    S_->apply(X, *y_, mode);
-    J_->apply(*y_, *r_);
-    r_->update(1.0, X, -1.0);
-    V_->apply(*r_, *d_, mode);
-    y_->update(1.0, *d_, 1.0);
-    J_->apply(*y_, *r_);
-    r_->update(1.0, X, -1.0);
-    S_->apply(*r_, *d_, mode);
-    y_->update(1.0, *d_, 1.0);
-    Y.update(alpha, *y_, beta);
-  }
-
- private:
-  RCP<const OP> J_, S_, V_;
-  mutable RCP<MV> y_, r_, d_;
-};
+// The free-DOF restriction and the two-stage composition are the library's
+// (perinox/solver/TwoStagePreconditioner.hpp: freeRestriction, twoStageOperator), so the study
+// measures the operator the scalable preset applies.
 
 /// FROSch's two-level Schwarz preconditioner as a Tpetra operator.
 class FroschOperator final : public OP {
@@ -398,68 +336,6 @@ RCP<MV> coordinates(const Problem& pb, bool perFreeDof) {
 // ---------------------------------------------------------------------------------------------
 // Q1 (2D) / Q1 hexahedral (3D) finite-element stiffness on the lattice of the particles
 
-/// Element stiffness of a square / cube of side h (isotropic linear elasticity, 2x2(x2) Gauss),
-/// nodes in lexicographic order of their (i, j, k) offsets, DOFs interleaved per node.
-Eigen::MatrixXd q1Stiffness(int D, double h, const MaterialSpec& m, double thickness) {
-  const double E = m.E, nu = m.nu;
-  Eigen::MatrixXd C;
-  if (D == 2) {
-    C = Eigen::MatrixXd::Zero(3, 3);
-    if (m.planar == PlanarMode::PlaneStress) {
-      const double f = E / (1 - nu * nu);
-      C << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
-    } else {
-      const double f = E / ((1 + nu) * (1 - 2 * nu));
-      C << f * (1 - nu), f * nu, 0, f * nu, f * (1 - nu), 0, 0, 0, f * (1 - 2 * nu) / 2;
-    }
-  } else {
-    C = Eigen::MatrixXd::Zero(6, 6);
-    const double lam = E * nu / ((1 + nu) * (1 - 2 * nu)), mu = E / (2 * (1 + nu));
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) C(i, j) = lam;
-      C(i, i) += 2 * mu;
-      C(3 + i, 3 + i) = mu;
-    }
-  }
-  const int nn = 1 << D, nd = nn * D, ns = D == 2 ? 3 : 6;
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(nd, nd);
-  const double g = 1.0 / std::sqrt(3.0);
-  for (int q = 0; q < nn; ++q) {
-    double xi[3] = {((q >> 0) & 1) ? g : -g, ((q >> 1) & 1) ? g : -g, ((q >> 2) & 1) ? g : -g};
-    Eigen::MatrixXd dN(nn, D);  // derivatives in physical coordinates (x = (xi + 1) h / 2)
-    for (int a = 0; a < nn; ++a) {
-      double s[3];
-      for (int d = 0; d < 3; ++d) s[d] = ((a >> d) & 1) ? 1.0 : -1.0;
-      for (int d = 0; d < D; ++d) {
-        double v = 0.5 * s[d] * (2.0 / h);
-        for (int e = 0; e < D; ++e)
-          if (e != d) v *= 0.5 * (1 + s[e] * xi[e]);
-        dN(a, d) = v;
-      }
-    }
-    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(ns, nd);
-    for (int a = 0; a < nn; ++a) {
-      if (D == 2) {
-        B(0, a * 2) = dN(a, 0);
-        B(1, a * 2 + 1) = dN(a, 1);
-        B(2, a * 2) = dN(a, 1);
-        B(2, a * 2 + 1) = dN(a, 0);
-      } else {
-        for (int d = 0; d < 3; ++d) B(d, a * 3 + d) = dN(a, d);
-        B(3, a * 3 + 1) = dN(a, 2);  // yz
-        B(3, a * 3 + 2) = dN(a, 1);
-        B(4, a * 3 + 0) = dN(a, 2);  // xz
-        B(4, a * 3 + 2) = dN(a, 0);
-        B(5, a * 3 + 0) = dN(a, 1);  // xy
-        B(5, a * 3 + 1) = dN(a, 0);
-      }
-    }
-    const double w = std::pow(h / 2, D) * (D == 2 ? thickness : 1.0);
-    K += w * B.transpose() * C * B;
-  }
-  return K;
-}
-
 /// The Q1 stiffness of the lattice through all particles (real and fictitious), on the all-DOF
 /// map, with prescribed DOFs eliminated (their rows and columns replaced by a unit diagonal
 /// scaled by diag).
@@ -486,7 +362,7 @@ RCP<TCrsMatrix> q1Matrix(const Problem& pb, const std::vector<double>& diag) {
     long long i = ijk[p][0], j = D > 1 ? ijk[p][1] : 0, k = D > 2 ? ijk[p][2] : 0;
     grid[(k * n[1] + j) * n[0] + i] = p;
   }
-  const Eigen::MatrixXd Ke = q1Stiffness(D, h, P.material, P.disc.thickness);
+  const Eigen::MatrixXd Ke = latticeElementStiffness(D, h, P.material, P.disc.thickness);
   const int nn = 1 << D;
   auto M = rcp(new TCrsMatrix(pb.allMap, D == 2 ? 18 : 81));
   std::map<GO, double> row[3];
@@ -1039,9 +915,9 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   } else if (precType != "None") {
     throw std::invalid_argument("unknown Preconditioner '" + precType + "'");
   }
-  if (!M.is_null() && allDofs) M = rcp(new FreeRestriction(M, ev.ownedFreeMap(), pb.freeToAll));
+  if (!M.is_null() && allDofs) M = freeRestriction(M, ev.ownedFreeMap(), pb.freeToAll);
   if (cand.isSublist("Fine Smoother")) {
-    // an Ifpack2 smoother on the assembled J around M (see TwoStageOperator)
+    // an Ifpack2 smoother on the assembled J around M (see twoStageOperator)
     auto& fs = cand.sublist("Fine Smoother");
     const auto tf = Clock::now();
     auto S = Ifpack2::Factory::create<RowMatrix>(fs.get<std::string>("Type", "CHEBYSHEV"), pb.J);
@@ -1051,7 +927,7 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
     res.tFine = seconds(tf);
     if (verbose && comm->getRank() == 0) std::cout << "fine smoother: " << S->description() << std::endl;
     RCP<const OP> Jop = pb.matrixFree ? pb.Jmf : RCP<const OP>(pb.J);
-    M = rcp(new TwoStageOperator(Jop, S, M));
+    M = twoStageOperator(Jop, S, M);
   }
   comm->barrier();
   res.tSetup = seconds(t0);

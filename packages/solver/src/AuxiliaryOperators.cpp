@@ -107,9 +107,9 @@ Eigen::Vector3d lowestCorner(const Discretization& d) {
 // ---------------------------------------------------------------------------------------------
 // Lattice FEM
 
-/// Element stiffness of a segment / square / cube of side h (isotropic linear elasticity; 2x2(x2)
-/// Gauss points), nodes in lexicographic order of their (i, j, k) offsets, DOFs interleaved.
-Eigen::MatrixXd elementStiffness(int D, double h, const MaterialSpec& m, double thickness) {
+}  // namespace
+
+Eigen::MatrixXd latticeElementStiffness(int D, double h, const MaterialSpec& m, double thickness) {
   const double E = m.E, nu = m.nu;
   if (D == 1) {
     Eigen::MatrixXd K(2, 2);
@@ -175,6 +175,8 @@ Eigen::MatrixXd elementStiffness(int D, double h, const MaterialSpec& m, double 
   return K;
 }
 
+namespace {
+
 class LatticeFemSource final : public AuxiliarySource {
  public:
   // The evaluator is held weakly: it holds the linear solver that holds this source.
@@ -214,7 +216,7 @@ class LatticeFemSource final : public AuxiliarySource {
       auto it = site.find(key(i, j, k));
       return it == site.end() ? -1 : it->second;
     };
-    const Eigen::MatrixXd Ke = elementStiffness(D, h, P.material, P.disc.thickness);
+    const Eigen::MatrixXd Ke = latticeElementStiffness(D, h, P.material, P.disc.thickness);
     const int nn = 1 << D;
     // Prescribed rows: a unit diagonal scaled like an interior node's diagonal.
     std::vector<double> diag(D);

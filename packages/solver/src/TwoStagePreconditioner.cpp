@@ -253,6 +253,18 @@ Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> twoStagePreconditionerFac
   return rcp(new TwoStageFactory(std::move(source)));
 }
 
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> freeRestriction(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> inner, Teuchos::RCP<const Tpetra::Map<int, long long>> freeMap,
+    std::vector<int> freeToAll) {
+  return rcp(new FreeRestriction(std::move(inner), std::move(freeMap), std::move(freeToAll)));
+}
+
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> J, Teuchos::RCP<const Tpetra::Operator<double, int, long long>> S,
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> V) {
+  return rcp(new TwoStageOperator(std::move(J), std::move(S), std::move(V)));
+}
+
 TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {
   if (auto* f = dynamic_cast<const TwoStageFactory*>(&factory)) return f->statistics();
   return {};

@@ -10,6 +10,9 @@
 //    body's broken bonds removed and its detached particles frozen, when bonds break.
 #include "perinox/solver/TwoStagePreconditioner.hpp"
 
+#include "perinox/material/Material.hpp"
+
+#include <Eigen/Dense>
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
 
@@ -19,6 +22,11 @@ namespace perinox {
 
 class PeridynamicEvaluator;
 struct Discretization;
+
+/// Element stiffness of a segment / square / cube of side h (isotropic linear elasticity, E and nu
+/// of m, its planar mode; 2D: times the thickness, 1D: thickness = the cross-section area; 2x2(x2)
+/// Gauss points), nodes in lexicographic order of their (i, j, k) offsets, DOFs interleaved.
+Eigen::MatrixXd latticeElementStiffness(int dim, double h, const MaterialSpec& m, double thickness);
 
 /// Whether every particle of d sits on the lattice of spacing d.dx through the lowest particle
 /// (to 1e-6 dx), one particle per site.

@@ -17,7 +17,9 @@
 #include <Teuchos_RCP.hpp>
 #include <Thyra_PreconditionerFactoryBase.hpp>
 #include <Tpetra_CrsMatrix_fwd.hpp>
+#include <Tpetra_Map_fwd.hpp>
 #include <Tpetra_MultiVector_fwd.hpp>
+#include <Tpetra_Operator_fwd.hpp>
 
 #include <memory>
 #include <string>
@@ -67,6 +69,18 @@ Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> twoStagePreconditionerFac
 
 /// The factory's valid parameters (with defaults).
 Teuchos::RCP<const Teuchos::ParameterList> twoStageValidParameters();
+
+/// The two pieces the factory composes, for programs that compose their own (the preconditioner
+/// study, drivers/bench_preconditioners.cpp):
+/// an operator on the all-DOF map seen on J's free DOFs, y_free = (M [x_free; 0])_free ...
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> freeRestriction(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> inner,
+    Teuchos::RCP<const Tpetra::Map<int, long long>> freeMap, std::vector<int> freeToAll);
+/// ... and y = S r; y += V (r - J y); y += S (r - J y).
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> J,
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> S,
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> V);
 
 /// Statistics of the factory's set-ups (for tests and reports): hierarchies built and reused.
 struct TwoStageStatistics {
