@@ -129,8 +129,8 @@ std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& p
   if (probe.quantity == "Reaction") return ev.reactionOn(x, probe.particles);
   std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
   for (int p : probe.particles)
-    if (p >= ev.firstOwned() && p < ev.endOwned()) {
-      for (int c = 0; c < D; ++c) s[c] += uOwned[(p - ev.firstOwned()) * D + c];
+    if (const int l = ev.ownedIndex(p); l >= 0) {
+      for (int c = 0; c < D; ++c) s[c] += uOwned[static_cast<std::size_t>(l) * D + c];
       s[D] += 1;
     }
   Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, D + 1, s.data(), g.data());
@@ -144,12 +144,13 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
   const auto& d = ev.problem().disc;
   const int D = ev.problem().dim();
   double s[2] = {0, 0}, g[2] = {0, 0};
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
+    const long long p = ev.ownedParticles()[l];
     if (d.fictitious[p]) continue;
     Eigen::VectorXd ur(D), u(D);
     for (int c = 0; c < D; ++c) {
       ur[c] = ref.displacement(d.X[p], c);
-      u[c] = uOwned[(p - ev.firstOwned()) * D + c];
+      u[c] = uOwned[l * D + c];
     }
     if (ur.norm() <= 1e-14 * d.dx) continue;
     s[0] += (u - ur).norm() / ur.norm() * d.volume[p];
@@ -165,8 +166,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   const int D = ev.problem().dim();
   const auto u = ev.ownedDisplacements(x);
   const auto outs = ev.ownedOutputs(x);
-  const long long b = ev.firstOwned(), e = ev.endOwned();
-  const std::size_t n = static_cast<std::size_t>(e - b);
+  const std::size_t n = ev.ownedParticles().size();
   std::vector<Eigen::Vector3d> pts(n);
   PointField disp{"displacement", 3, std::vector<double>(3 * n, 0.0)};
   PointField stress{"cauchy_stress", 9, std::vector<double>(9 * n, 0.0)};
@@ -177,7 +177,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   std::ostringstream csv;
   csv << std::setprecision(12);
   for (std::size_t i = 0; i < n; ++i) {
-    const long long p = b + static_cast<long long>(i);
+    const long long p = ev.ownedParticles()[i];
     pts[i] = d.X[p];
     for (int c = 0; c < D; ++c) disp.values[3 * i + c] = u[i * D + c];
     for (int r = 0; r < 3; ++r)
@@ -353,6 +353,7 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
       for (const char* k : {"Max Total Steps", "Linear Solver Preset", "Linear Solver", "Verbosity"}) so.remove(k, false);
     }
     if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
+    if (pl->isSublist("Discretization")) pl->sublist("Discretization").remove("Partition", false);
     pl->remove("Output", false);
     // "Sublist/Key" -> value: the order of the keys and whether a value came from the scene
     // file, a --set or a default does not matter, only the values.
@@ -623,17 +624,21 @@ struct RunFacts {
   TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
 };
 
-/// The per-rank particle CSVs gathered into fields.csv (for plotting), the parts removed.
+/// The per-rank particle CSVs gathered into fields.csv (for plotting) in particle id order
+/// (a rank's particles are the partition's choice), the parts removed.
 void gatherFieldsCsv(const std::string& staging, int nranks) {
-  std::ofstream all(staging + "/fields.csv");
-  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
+  std::vector<std::pair<long long, std::string>> rows;
   for (int r = 0; r < nranks; ++r) {
     const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
     std::ifstream in(part);
-    all << in.rdbuf();
+    for (std::string line; std::getline(in, line);) rows.emplace_back(std::stoll(line), std::move(line));
     in.close();
     fs::remove(part);
   }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::ofstream all(staging + "/fields.csv");
+  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
+  for (const auto& row : rows) all << row.second << '\n';
   if (!all) throw std::runtime_error("cannot write '" + staging + "/fields.csv'");
 }
 

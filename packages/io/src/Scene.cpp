@@ -21,6 +21,7 @@
 
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
+#include "perinox/model/Partition.hpp"
 
 namespace perinox {
 
@@ -241,6 +242,11 @@ Teuchos::RCP<ParameterList> buildSchema() {
   d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing, in [0, 1)");
   d.set("Jitter Seed", 12345, "seed of the jitter (>= 0)");
   d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
+  setChoice(d, dp, "Partition", partitionName(PartitionMethod::Rcb),
+            {{partitionName(PartitionMethod::Rcb), "Zoltan2 recursive coordinate bisection of the reference positions"},
+             {partitionName(PartitionMethod::MultiJagged), "Zoltan2 multi-jagged"},
+             {partitionName(PartitionMethod::Slabs), "contiguous particle-id ranges, lattice rows; for tests"}},
+            "how particles are split among MPI ranks: ");
   auto& m = s->sublist("Material", false, "elastic material");
   const std::string mp = "Material";
   setChoice(m, mp, "Model", "Hencky", {{"Hencky", "finite deformation"}, {"Small Strain", ""}});
@@ -1013,6 +1019,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   } catch (const std::runtime_error& e) {
     fail(file, std::string("Discretization: ") + e.what());
   }
+  parsePartition(dl.get<std::string>("Partition"), problem->partition);  // a choice: validated
   const Discretization& d = problem->disc;
 
   // --- effects ---
