@@ -622,6 +622,7 @@ struct RunFacts {
   // of three), the unit of the machine-independent cost ratios in docs/performance.md.
   double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
   TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
+  nlohmann::json partition;        // the partition: method, owned and ghost particles per rank
 };
 
 /// The per-rank particle CSVs gathered into fields.csv (for plotting) in particle id order
@@ -683,6 +684,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   j["matrix_bytes"] = facts.matrixBytes;
   j["peak_rss_mib_max_rank"] = facts.rssMax;
   j["peak_rss_mib_all_ranks"] = facts.rssSum;
+  j["partition"] = facts.partition;
   j["method"] = scene.solver.method;
   j["tolerance"] = scene.solver.tolerance;
   json steps = json::array();
@@ -877,6 +879,17 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
   Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, rss, Teuchos::outArg(facts.rssSum));
   long long bytes = static_cast<long long>(ev.matrixBytes());
   Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, bytes, Teuchos::outArg(facts.matrixBytes));
+  // Per rank: owned and ghost particles (what each halo exchange brings in) and peak memory.
+  const LocalParticles& lp = ev.model().particles();
+  const double mine[3] = {static_cast<double>(lp.numOwned), static_cast<double>(lp.size() - lp.numOwned), rss};
+  double most[3], least[3], sum[3];
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, mine, most);
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, 3, mine, least);
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, 3, mine, sum);
+  facts.partition = {{"method", partitionName(ev.problem().partition)},
+                     {"owned_max", most[0]}, {"owned_min", least[0]},
+                     {"ghosts_max", most[1]}, {"ghosts_min", least[1]}, {"ghosts_mean", sum[1] / comm.getSize()},
+                     {"peak_rss_mib_min_rank", least[2]}};
 }
 
 /// The solve's outcome: the last converged state and its load factor.
