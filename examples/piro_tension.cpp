@@ -19,8 +19,7 @@
 #include <iostream>
 
 #include <perinox/io/HostOutput.hpp>
-#include <perinox/solver/LinearSolver.hpp>
-#include <perinox/solver/LinearSolverValidation.hpp>
+#include <perinox/solver/EvaluatorSetup.hpp>
 
 using namespace perinox;
 
@@ -71,11 +70,9 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
   prescribe(*problem, selectBox(d, Vec3(-1.0, 0.0, 0.0), Vec3(0.0, 0.03, 0.0), Population::Fictitious), 1);
   prescribe(*problem, right, 0, [](const Vec3& X) { return 0.1 * X[0]; });
 
-  // 2. The model evaluator (it validates the problem) with a linear solver from perinox's Stratimikos factory.
-  auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
-  auto linear = Teuchos::getParametersFromXmlFile(solverFile);
-  validateLinearSolverList(*linear, solverFile);  // one sentence for a misspelt key, before any work
-  evaluator->set_W_factory(buildLinearSolverFactory(linear, comm->getSize()));
+  // 2. The model evaluator (it validates the problem) with the linear solver of the preset file
+  //    (checked first: one sentence for a misspelt key, before any work).
+  auto evaluator = evaluatorWithSolver(comm, problem, solverFile);
 
   // 3. Piro's NOX solver: full Newton until |F| < 1e-12 |F(x0)| or |F| at twice its round-off scale
   //    (NOX's default |F| < 1e-8 means nothing for forces of 1e7 N).
