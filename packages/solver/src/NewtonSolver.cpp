@@ -202,6 +202,23 @@ Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& optio
   return params;
 }
 
+Teuchos::RCP<Teuchos::ParameterList> newtonParametersWithStatusTests(const NewtonOptions& options, double relativeTolerance,
+                                                                    double roundoff) {
+  auto params = newtonParameters(options);
+  auto& tests = params->sublist("Status Tests");
+  tests.set("Test Type", "Combo");
+  tests.set("Combo Type", "OR");
+  tests.set("Number of Tests", 4);
+  tests.sublist("Test 0").set("Test Type", "RelativeNormF");
+  tests.sublist("Test 0").set("Tolerance", relativeTolerance);
+  tests.sublist("Test 1").set("Test Type", "NormF");
+  tests.sublist("Test 1").set("Tolerance", options.floorFactor * roundoff);
+  tests.sublist("Test 2").set("Test Type", "MaxIters");
+  tests.sublist("Test 2").set("Maximum Iterations", options.maxIterations);
+  tests.sublist("Test 3").set("Test Type", "FiniteValue");
+  return params;
+}
+
 Teuchos::RCP<CountingGroup> countingGroup(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>& model,
                                           const Thyra::VectorBase<double>& x, double linearTolerance) {
   NOX::Thyra::Vector guess(x.clone_v());

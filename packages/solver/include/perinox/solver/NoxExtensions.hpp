@@ -105,6 +105,13 @@ NewtonStatusTests newtonStatusTests(Teuchos::RCP<const ResidualScale> scale, dou
 /// Region"), Newton directions with the constant forcing term options.linearTolerance and
 /// "Rescue Bad Newton Solve", NOX's output at options.verbosity on rank 0.
 Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& options);
+/// For a host that hands NOX (or Piro, as its "NOX" sublist) the whole list and lets NOX build the
+/// status tests: newtonParameters(options) with "Status Tests" = RelativeNormF (|F| <=
+/// relativeTolerance |F(x0)|) OR NormF (|F| <= options.floorFactor * roundoff, where |F| cannot
+/// fall further; PeridynamicEvaluator::roundoffScale) OR MaxIters (options.maxIterations) OR
+/// FiniteValue. (NOX's default, |F| < 1e-8, means nothing for forces of 1e7 N.)
+Teuchos::RCP<Teuchos::ParameterList> newtonParametersWithStatusTests(const NewtonOptions& options, double relativeTolerance,
+                                                                    double roundoff);
 /// A CountingGroup at the initial guess x (copied), with the model's W_prec when it supports one
 /// (matrix-free W_op); linear solves above linearTolerance count as unconverged.
 Teuchos::RCP<CountingGroup> countingGroup(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>& model,
