@@ -98,6 +98,13 @@ class Choices final : public Teuchos::StringToIntegralParameterEntryValidator<E>
   void printDoc(const std::string& doc, std::ostream& out) const override { Teuchos::StrUtils::printLines(out, "# ", doc); }
 };
 
+/// The allowed values of each entry of an array of strings (Fictitious Sides); documented by the key.
+class ChoiceList final : public Teuchos::ArrayStringValidator {
+ public:
+  using Teuchos::ArrayStringValidator::ArrayStringValidator;
+  void printDoc(const std::string& doc, std::ostream& out) const override { Teuchos::StrUtils::printLines(out, "# ", doc); }
+};
+
 /// A number's allowed range, each end closed, open or absent; its phrase ("from 1 to 60", "in (0,
 /// 1]", "positive", ">= 0") ends the key's documentation and the message refusing a value outside
 /// it, with an optional note on why.
@@ -320,7 +327,7 @@ void discretizationSchema(ParameterList& d) {
   std::vector<std::string> sides;
   for (const auto& c : sideChoices()) sides.push_back(c.value);
   d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides),
-        Teuchos::rcp(new Teuchos::ArrayStringValidator(Teuchos::rcp(new Teuchos::StringValidator(Teuchos::Array<std::string>(sides))))));
+        Teuchos::rcp(new ChoiceList(Teuchos::rcp(new Teuchos::StringValidator(Teuchos::Array<std::string>(sides))))));
   d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
   d.set("Mesh File", "", "Exodus: path (relative to the scene) of the Exodus II mesh (hex, tet, wedge, sphere in 3D; quad, tri, sphere in 2D, areas x Thickness)");
   setNumber(d, "Jitter", 0.0, "random shift of real particles, fraction of the spacing", reals(End::Closed, 0, 1, End::Open));
