@@ -92,6 +92,7 @@ std::map<std::string, std::pair<std::string, std::string>> physicsValues(const s
     for (const char* k : {"Max Total Steps", "Linear Solver Preset", "Linear Solver", "Verbosity"}) so.remove(k, false);
   }
   if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
+  if (pl->isSublist("Discretization")) pl->sublist("Discretization").remove("Partition", false);
   pl->remove("Output", false);
   std::map<std::string, std::pair<std::string, std::string>> values;
   std::function<void(const Teuchos::ParameterList&, const std::string&)> walk = [&](const Teuchos::ParameterList& l,

@@ -74,7 +74,7 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
   const auto u = ev_.ownedDisplacements(x);
   const auto outs = ev_.ownedOutputs(x);
   const std::vector<double> damage = ev_.problem().damage ? ev_.ownedDamage() : std::vector<double>(outs.size(), 0.0);
-  const int n = static_cast<int>(ev_.endOwned() - ev_.firstOwned());
+  const int n = static_cast<int>(ev_.ownedParticles().size());
   std::vector<double> mine(static_cast<std::size_t>(n) * kPerParticle, 0.0);
   for (int i = 0; i < n; ++i) {
     double* v = &mine[static_cast<std::size_t>(i) * kPerParticle];
@@ -83,8 +83,9 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
     v[3] = s(0, 0), v[4] = s(1, 1), v[5] = s(2, 2), v[6] = s(0, 1), v[7] = s(1, 2), v[8] = s(2, 0);
     v[9] = damage[i];
   }
-  // Owned particles are contiguous id ranges in rank order: rank 0 receives them in id order.
-  // (MPI itself: Teuchos::gatherv has no case for double in Trilinos 13.2, docs/exodus.md.)
+  // Rank 0 receives every rank's values and particle ids and puts them in id order (the
+  // partition decides which ids a rank owns). (MPI itself: Teuchos::gatherv has no case for
+  // double in Trilinos 13.2, docs/exodus.md.)
   const int ranks = comm.getSize();
   const int count = static_cast<int>(mine.size());
   std::vector<int> counts(ranks, 0), displs(ranks, 0);
@@ -94,6 +95,10 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
   for (int r = 0; r < ranks; ++r) displs[r] = total, total += counts[r];
   std::vector<double> all(comm.getRank() == 0 ? total : 0);
   MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, raw);
+  for (int r = 0; r < ranks; ++r) counts[r] /= kPerParticle, displs[r] /= kPerParticle;
+  std::vector<long long> ids(comm.getRank() == 0 ? total / kPerParticle : 0);
+  MPI_Gatherv(ev_.ownedParticles().data(), n, MPI_LONG_LONG, ids.data(), counts.data(), displs.data(), MPI_LONG_LONG,
+              0, raw);
   std::vector<double> globals{lambda};
   for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
     if (scene_.probes[k].quantity == "Profile") continue;
@@ -105,7 +110,7 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
     const std::size_t np = static_cast<std::size_t>(total / kPerParticle);
     std::vector<std::vector<double>> nodal(kPerParticle, std::vector<double>(np));
     for (std::size_t p = 0; p < np; ++p)
-      for (int v = 0; v < kPerParticle; ++v) nodal[v][p] = all[p * kPerParticle + v];
+      for (int v = 0; v < kPerParticle; ++v) nodal[v][static_cast<std::size_t>(ids[p])] = all[p * kPerParticle + v];
     writer_->writeStep(lambda, nodal, globals);
   });
   ++steps_;

@@ -19,8 +19,8 @@ std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& p
   if (probe.quantity == "Reaction") return ev.reactionOn(x, probe.particles);
   std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
   for (int p : probe.particles)
-    if (p >= ev.firstOwned() && p < ev.endOwned()) {
-      for (int c = 0; c < D; ++c) s[c] += uOwned[(p - ev.firstOwned()) * D + c];
+    if (const int l = ev.ownedIndex(p); l >= 0) {
+      for (int c = 0; c < D; ++c) s[c] += uOwned[static_cast<std::size_t>(l) * D + c];
       s[D] += 1;
     }
   Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, D + 1, s.data(), g.data());
@@ -34,12 +34,13 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
   const auto& d = ev.problem().disc;
   const int D = ev.problem().dim();
   double s[2] = {0, 0}, g[2] = {0, 0};
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
+    const long long p = ev.ownedParticles()[l];
     if (d.fictitious[p]) continue;
     Eigen::VectorXd ur(D), u(D);
     for (int c = 0; c < D; ++c) {
       ur[c] = ref.displacement(d.X[p], c);
-      u[c] = uOwned[(p - ev.firstOwned()) * D + c];
+      u[c] = uOwned[l * D + c];
     }
     if (ur.norm() <= 1e-14 * d.dx) continue;
     s[0] += (u - ur).norm() / ur.norm() * d.volume[p];

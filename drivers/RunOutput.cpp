@@ -60,17 +60,21 @@ std::vector<double> finitePrefix(const std::vector<double>& r) {
   return {r.begin(), std::find_if(r.begin(), r.end(), [](double v) { return !std::isfinite(v); })};
 }
 
-/// The per-rank particle CSVs gathered into fields.csv (for plotting), the parts removed.
+/// The per-rank particle CSVs gathered into fields.csv (for plotting) in particle id order
+/// (a rank's particles are the partition's choice), the parts removed.
 void gatherFieldsCsv(const std::string& staging, int nranks) {
-  std::ofstream all(staging + "/fields.csv");
-  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
+  std::vector<std::pair<long long, std::string>> rows;
   for (int r = 0; r < nranks; ++r) {
     const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
     std::ifstream in(part);
-    all << in.rdbuf();
+    for (std::string line; std::getline(in, line);) rows.emplace_back(std::stoll(line), std::move(line));
     in.close();
     fs::remove(part);
   }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::ofstream all(staging + "/fields.csv");
+  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
+  for (const auto& row : rows) all << row.second << '\n';
   if (!all) throw std::runtime_error("cannot write '" + staging + "/fields.csv'");
 }
 
@@ -162,8 +166,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   const int D = ev.problem().dim();
   const auto u = ev.ownedDisplacements(x);
   const auto outs = ev.ownedOutputs(x);
-  const long long b = ev.firstOwned(), e = ev.endOwned();
-  const std::size_t n = static_cast<std::size_t>(e - b);
+  const std::size_t n = ev.ownedParticles().size();
   std::vector<Eigen::Vector3d> pts(n);
   PointField disp{"displacement", 3, std::vector<double>(3 * n, 0.0)};
   PointField stress{"cauchy_stress", 9, std::vector<double>(9 * n, 0.0)};
@@ -174,7 +177,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   std::ostringstream csv;
   csv << std::setprecision(12);
   for (std::size_t i = 0; i < n; ++i) {
-    const long long p = b + static_cast<long long>(i);
+    const long long p = ev.ownedParticles()[i];
     pts[i] = d.X[p];
     for (int c = 0; c < D; ++c) disp.values[3 * i + c] = u[i * D + c];
     for (int r = 0; r < 3; ++r)

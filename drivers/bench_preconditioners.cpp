@@ -185,7 +185,7 @@ void setState(const Scene& scene, const PeridynamicEvaluator& ev, const std::str
     throw std::invalid_argument("--state affine needs the scene's Reference (an analytic displacement)");
   std::vector<std::pair<long long, double>> values;
   const ProblemSpec& P = ev.problem();
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p)
+  for (long long p : ev.ownedParticles())
     for (int c = 0; c < P.dim(); ++c) {
       const long long g = ev.freeDof(p, c);
       if (g >= 0) values.emplace_back(g, scene.reference.displacement(P.disc.X[p], c));
@@ -199,7 +199,7 @@ void setState(const Scene& scene, const PeridynamicEvaluator& ev, const std::str
 RCP<TCrsMatrix> toAllDofs(const Problem& pb, const TCrsMatrix& A, const std::vector<double>& diag) {
   const PeridynamicEvaluator& ev = *pb.ev;
   const int D = ev.problem().dim();
-  const LO nOwnedParticles = static_cast<LO>(ev.endOwned() - ev.firstOwned());
+  const LO nOwnedParticles = static_cast<LO>(ev.ownedParticles().size());
   const LO nAll = nOwnedParticles * D;
   // Column map: the owned all-DOFs in row order, then the remote columns of A.
   auto Acol = A.getColMap();
@@ -289,7 +289,7 @@ RCP<MV> rigidBodyModes(const Problem& pb, bool allDofs, bool zeroPrescribed) {
   for (int m = 0; m < nModes; ++m) {
     auto col = B->getDataNonConst(m);
     LO k = 0;
-    for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    for (long long p : ev.ownedParticles()) {
       const Eigen::Vector3d r = (P.disc.X[p] - c) / L;
       for (int a = 0; a < D; ++a) {
         const bool fixed = ev.freeDof(p, a) < 0;
@@ -321,7 +321,7 @@ RCP<MV> coordinates(const Problem& pb, bool perFreeDof) {
   for (int a = 0; a < D; ++a) {
     auto col = C->getDataNonConst(a);
     LO k = 0;
-    for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    for (long long p : ev.ownedParticles()) {
       if (!perFreeDof) {
         col[k++] = P.disc.X[p][a];
         continue;
@@ -366,7 +366,7 @@ RCP<TCrsMatrix> q1Matrix(const Problem& pb, const std::vector<double>& diag) {
   const int nn = 1 << D;
   auto M = rcp(new TCrsMatrix(pb.allMap, D == 2 ? 18 : 81));
   std::map<GO, double> row[3];
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (long long p : ev.ownedParticles()) {
     for (int c = 0; c < D; ++c) row[c].clear();
     const long long i = ijk[p][0], j = D > 1 ? ijk[p][1] : 0, k = D > 2 ? ijk[p][2] : 0;
     // the cells having p as a corner: lower corner at (i - a0, j - a1, k - a2)
@@ -687,7 +687,7 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   setState(pb.scene, ev, state, *pb.x);
   // the all-DOF and node maps
   std::vector<GO> all, nodes;
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (long long p : ev.ownedParticles()) {
     nodes.push_back(p);
     for (int c = 0; c < D; ++c) all.push_back(p * D + c);
   }
@@ -701,9 +701,10 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
       if (ev.freeDof(p, c) >= 0) pb.freeGidToAll[ev.freeDof(p, c)] = p * D + c;
   auto fm = ev.ownedFreeMap();
   pb.freeToAll.assign(fm->getNodeNumElements(), -1);
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p)
+  const auto& owned = ev.ownedParticles();
+  for (std::size_t l = 0; l < owned.size(); ++l)
     for (int c = 0; c < D; ++c)
-      if (ev.freeDof(p, c) >= 0) pb.freeToAll[fm->getLocalElement(ev.freeDof(p, c))] = (p - ev.firstOwned()) * D + c;
+      if (ev.freeDof(owned[l], c) >= 0) pb.freeToAll[fm->getLocalElement(ev.freeDof(owned[l], c))] = l * D + c;
   // costs: residual (median of 5 after a warm-up), assembly, mat-vec
   residual(ev, *pb.x, *pb.b);
   std::vector<double> t;

@@ -92,7 +92,7 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
   auto guess = Thyra::createMember(evaluator->get_x_space());
   Thyra::assign(guess.ptr(), 0.0);
   std::vector<std::pair<long long, double>> stretch;
-  for (long long p = evaluator->firstOwned(); p < evaluator->endOwned(); ++p)
+  for (long long p : evaluator->ownedParticles())
     if (evaluator->freeDof(p, 0) >= 0) stretch.push_back({evaluator->freeDof(p, 0), 0.1 * d.X[p][0]});
   evaluator->setOwnedFreeValues(*guess, stretch);
   auto in = solver.createInArgs();

@@ -196,8 +196,8 @@ class TpetraSink final : public ElementSink {
 // ---------------------------------------------------------------------------------------------
 
 Assembler::Assembler(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem, const Model& model,
-                     const DofMaps& dofs, long long begin, long long end)
-    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), begin_(begin), end_(end) {}
+                     const DofMaps& dofs)
+    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs) {}
 
 const JacobianGraphs& Assembler::graphs(bool neighbours) const {
   JacobianGraphs& g = neighbours ? nbr_ : full_;
@@ -289,7 +289,9 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   std::vector<std::vector<GO>> rowCols;
   std::vector<GO> rows;
   std::vector<long long> S;
-  for (long long p = begin_; p < end_; ++p) {
+  const LocalParticles& lp = model_.particles();
+  for (int l = 0; l < lp.numOwned; ++l) {
+    const long long p = lp.globalId[l];
     S.clear();
     auto addElement = [&](long long i) {
       S.push_back(i);

@@ -7,8 +7,8 @@
 namespace perinox {
 
 DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem,
-                                     Model& model, const DofMaps& dofs, long long begin, long long end)
-    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), begin_(begin), end_(end) {
+                                     Model& model, const DofMaps& dofs)
+    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs) {
   // Stiffness of frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows are neither
   // negligible nor dominant in the linear solves.
   frozen_.stiffness = problem.material.E * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
@@ -95,8 +95,8 @@ void DamageBookkeeping::detachSingular(const double* xd, BreakReport& rep) {
     for (long long g : ids) {
       rep.detached.push_back(g);
       detachedAll_.push_back(g);
-      if (g < begin_ || g >= end_) continue;
-      const int l = static_cast<int>(g - begin_);
+      const int l = model_.particles().ownedLocal(g);
+      if (l < 0) continue;
       for (int c = 0; c < D; ++c) {
         const int lid = dofs_.overlapFreeLid[l * D + c];
         if (lid >= 0) frozen_.dofs.emplace_back(lid, xd[lid]);

@@ -17,7 +17,7 @@
 #include <sstream>
 
 #include "perinox/evaluator/JacobianOperators.hpp"
-#include "perinox/model/Partition.hpp"
+#include "perinox/evaluator/Partitioner.hpp"
 
 namespace perinox {
 
@@ -31,10 +31,8 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   if (!problem_) throw std::invalid_argument("ProblemSpec: the evaluator was given no problem");
   validateProblem(*problem_);
   const ProblemSpec& P = *problem_;
-  const long long n = P.disc.size();
-  begin_ = partitionBegin(n, comm_->getSize(), comm_->getRank());
-  end_ = partitionBegin(n, comm_->getSize(), comm_->getRank() + 1);
-  LocalParticles lp = localParticles(P.disc, begin_, end_);
+  owned_ = perinox::ownedParticles(comm_, P.disc, P.partition);
+  LocalParticles lp = localParticles(P.disc, owned_);
   if (!P.modulusScale.empty())
     for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
   model_ = std::make_unique<Model>(P.material, std::move(lp));
@@ -45,8 +43,8 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   if (P.damage) model_->enableDamage(P.damageSpec);
 
   dofs_ = DofMaps(comm_, P, model_->particles());
-  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_, begin_, end_);
-  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_, begin_, end_);
+  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_);
+  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_);
   buildExternalForce();
   computeRoundoffScale();
   xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(dofs_.ownedFree);
@@ -474,9 +472,9 @@ std::vector<double> PeridynamicEvaluator::reactionOn(const Thyra::VectorBase<dou
   const int D = problem_->dim();
   std::vector<double> s(D, 0.0), g(D, 0.0);
   for (int p : particles)
-    if (p >= begin_ && p < end_)
+    if (const int l = ownedIndex(p); l >= 0)
       for (int c = 0; c < D; ++c)
-        if (problem_->isFixed(p, c)) s[c] += rd[(p - begin_) * D + c];
+        if (problem_->isFixed(p, c)) s[c] += rd[l * D + c];
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, D, s.data(), g.data());
   return g;
 }
@@ -487,8 +485,8 @@ std::vector<double> PeridynamicEvaluator::meanDisplacement(const Thyra::VectorBa
   const auto u = ownedDisplacements(x);
   std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
   for (int p : particles)
-    if (p >= begin_ && p < end_) {
-      for (int c = 0; c < D; ++c) s[c] += u[(p - begin_) * D + c];
+    if (const int l = ownedIndex(p); l >= 0) {
+      for (int c = 0; c < D; ++c) s[c] += u[static_cast<std::size_t>(l) * D + c];
       s[D] += 1;
     }
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, D + 1, s.data(), g.data());

@@ -18,8 +18,8 @@ void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev,
   const auto outs = ev.ownedOutputs(x);
   std::vector<Eigen::Vector3d> points;
   PointField displacement{"displacement", 3, {}}, stress{"cauchy_stress", 9, {}};
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
-    const std::size_t l = static_cast<std::size_t>(p - ev.firstOwned());
+  for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
+    const long long p = ev.ownedParticles()[l];
     points.push_back(d.X[p]);
     for (int c = 0; c < 3; ++c) displacement.values.push_back(c < D ? u[l * D + c] : 0.0);
     for (int r = 0; r < 3; ++r)

@@ -25,6 +25,7 @@
 
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
+#include "perinox/model/Partition.hpp"
 
 namespace perinox {
 
@@ -333,6 +334,11 @@ void discretizationSchema(ParameterList& d) {
   setNumber(d, "Jitter", 0.0, "random shift of real particles, fraction of the spacing", reals(End::Closed, 0, 1, End::Open));
   setNumber(d, "Jitter Seed", 12345, "seed of the jitter", ints(0));
   d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
+  setChoice<PartitionMethod>(d, "Partition", partitionName(PartitionMethod::Rcb),
+                             {{partitionName(PartitionMethod::Rcb), PartitionMethod::Rcb, "Zoltan2 recursive coordinate bisection of the reference positions"},
+                              {partitionName(PartitionMethod::MultiJagged), PartitionMethod::MultiJagged, "Zoltan2 multi-jagged"},
+                              {partitionName(PartitionMethod::Slabs), PartitionMethod::Slabs, "contiguous particle-id ranges, lattice rows; for tests"}},
+                             "how particles are split among MPI ranks: ");
 }
 
 void materialSchema(ParameterList& m) {
@@ -1192,6 +1198,7 @@ void readDiscretization(SceneBuild& b) {
   } catch (const std::runtime_error& e) {
     fail(b.file, std::string("Discretization: ") + e.what());
   }
+  b.problem.partition = dl.choice<PartitionMethod>("Partition");
 }
 
 /// Model/Stabilization and G. The micromodulus is the library's (ProblemSpec::stabilizationSpec).

@@ -38,7 +38,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   const int D = P.dim();
   const auto comm = ev.comm();
   std::vector<GO> all, nodes;
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (long long p : ev.ownedParticles()) {
     nodes.push_back(p);
     for (int c = 0; c < D; ++c) all.push_back(p * D + c);
   }
@@ -49,15 +49,16 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   a.blockSize = D;
   auto fm = ev.ownedFreeMap();
   a.freeToAll.assign(fm->getNodeNumElements(), -1);
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p)
+  const auto& owned = ev.ownedParticles();
+  for (std::size_t l = 0; l < owned.size(); ++l)
     for (int c = 0; c < D; ++c)
-      if (ev.freeDof(p, c) >= 0)
-        a.freeToAll[fm->getLocalElement(ev.freeDof(p, c))] = static_cast<LO>((p - ev.firstOwned()) * D + c);
+      if (ev.freeDof(owned[l], c) >= 0)
+        a.freeToAll[fm->getLocalElement(ev.freeDof(owned[l], c))] = static_cast<LO>(l * D + c);
   // The body's centroid (owned particles, summed over ranks) and the modes about it, scaled by
   // the horizon so that every column has entries of order one; non-zero on prescribed rows too
   // (a zero column there made MueLu throw, docs/trilinos-notes.md).
   double local[4] = {0, 0, 0, 0}, global[4];
-  for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+  for (long long p : ev.ownedParticles()) {
     for (int d = 0; d < 3; ++d) local[d] += P.disc.X[p][d];
     local[3] += 1;
   }
@@ -70,7 +71,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   for (int m = 0; m < nModes; ++m) {
     auto col = B->getDataNonConst(m);
     LO k = 0;
-    for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    for (long long p : ev.ownedParticles()) {
       const Eigen::Vector3d r = (P.disc.X[p] - centre) / L;
       for (int a = 0; a < D; ++a) {
         double v = 0;
@@ -90,7 +91,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   for (int d = 0; d < D; ++d) {
     auto col = C->getDataNonConst(d);
     LO k = 0;
-    for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) col[k++] = P.disc.X[p][d];
+    for (long long p : ev.ownedParticles()) col[k++] = P.disc.X[p][d];
   }
   a.nullspace = B;
   a.coordinates = C;
@@ -225,7 +226,7 @@ class LatticeFemSource final : public AuxiliarySource {
     std::map<GO, double> row[3];
     std::vector<GO> cols;
     std::vector<double> vals;
-    for (long long p = ev.firstOwned(); p < ev.endOwned(); ++p) {
+    for (long long p : ev.ownedParticles()) {
       for (int c = 0; c < D; ++c) row[c].clear();
       const long long i = ijk[p][0], j = ijk[p][1], k = ijk[p][2];
       for (int cell = 0; cell < nn; ++cell) {  // the cells having p as a corner

@@ -71,7 +71,7 @@ struct FrozenDofs {
 class Assembler {
  public:
   Assembler(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem, const Model& model,
-            const DofMaps& dofs, long long begin, long long end);
+            const DofMaps& dofs);
   /// The graphs, built on first use.
   const JacobianGraphs& graphs(bool neighbours) const;
   /// The internal force on every owned DOF (owned particles * dim) at the local displacements u;
@@ -90,7 +90,6 @@ class Assembler {
   const ProblemSpec& problem_;
   const Model& model_;
   const DofMaps& dofs_;
-  long long begin_, end_;
   mutable JacobianGraphs full_, nbr_;
   mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
 };

@@ -138,8 +138,11 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   const ProblemSpec& problem() const { return *problem_; }
   const Model& model() const { return *model_; }
-  long long firstOwned() const { return begin_; }
-  long long endOwned() const { return end_; }
+  /// The particles this rank owns (global ids, sorted; `Discretization/Partition` chose them).
+  /// The owned arrays of this class (displacements, outputs, damage) are in this order.
+  const std::vector<long long>& ownedParticles() const { return owned_; }
+  /// Position of global particle g in ownedParticles(), or -1 if another rank owns it.
+  int ownedIndex(long long g) const { return model_->particles().ownedLocal(g); }
   long long numFreeDofs() const { return dofs_.numFree; }
   Teuchos::RCP<const TMap> ownedFreeMap() const { return dofs_.ownedFree; }
   Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
@@ -164,7 +167,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   std::shared_ptr<const ProblemSpec> problem_;
   std::unique_ptr<Model> model_;
-  long long begin_ = 0, end_ = 0;
+  std::vector<long long> owned_;  // owned particles' global ids, sorted
   mutable double lambda_ = 0.0;  // the current load factor (an evaluation with p(0) sets it)
   DofMaps dofs_;
   std::unique_ptr<Assembler> assembler_;

@@ -10,6 +10,7 @@
 #include "perinox/core/Discretization.hpp"
 #include "perinox/material/Material.hpp"
 #include "perinox/model/Model.hpp"
+#include "perinox/model/Partition.hpp"
 
 namespace perinox {
 
@@ -42,6 +43,7 @@ struct ProblemSpec {
   std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1
   std::vector<double> bodyForce;        // per particle * dim: body force density at lambda = 1
   RotationSpec rotation;                // superposed rigid rotation (angle 0: none, costs nothing)
+  PartitionMethod partition = PartitionMethod::Rcb;  // which particles each MPI rank owns
 
   int dim() const { return disc.dim; }
   bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }

@@ -9,6 +9,7 @@
 // energy), so the element tangent is symmetric for every energy-derived effect.
 // No Trilinos here: the evaluator maps local particles to degrees of freedom.
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -46,6 +47,12 @@ struct LocalParticles {
   std::vector<int> famIndex;
   std::vector<double> modulusScale;  // per local particle (E_i / E); empty for a uniform material
   int size() const { return static_cast<int>(X.size()); }
+  /// Local id of global particle g if this rank owns it (owned ids are sorted), else -1.
+  int ownedLocal(long long g) const {
+    const auto end = globalId.begin() + numOwned;
+    const auto it = std::lower_bound(globalId.begin(), end, g);
+    return it != end && *it == g ? static_cast<int>(it - globalId.begin()) : -1;
+  }
 };
 
 /// Per-particle workspace handed from the model to each effect.
