@@ -50,4 +50,46 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
   return g[1] > 0 ? g[0] / g[1] : 0.0;
 }
 
+void ConsoleLines::accepted(const StepInfo& s) {
+  if (!speak_) return;
+  CoutFormat keep;
+  const auto& nr = s.result;
+  const auto& rec = s.record;
+  std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(4) << s.loadFactor
+            << (adr_ ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
+            << (adr_ ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
+            << std::scientific << std::setprecision(3)
+            << (nr.residuals.empty() ? 0.0 : (adr_ ? nr.residuals.front() : nr.residuals.back())) << (adr_ ? ", " : "")
+            << (adr_ ? std::to_string(nr.residuals.back()) : std::string())
+            << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
+            << (rec.linearFailures > 0 ? "  unconverged linear solves " + std::to_string(rec.linearFailures) : std::string())
+            << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
+            << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
+}
+
+std::string StabilityCheck::vet(const StepInfo& s, double previous) {
+  const int neg = ev_.negativePivots(s.x);
+  if (neg == 0) return "";
+  std::ostringstream m;
+  if (neg > 0)
+    m << "loss of stability: the equilibrium found at load factor " << s.loadFactor << " is unstable (the tangent has "
+      << neg << " negative pivot(s)): the path passed a bifurcation or limit point between load factors " << previous
+      << " and " << s.loadFactor << "; the last stable state is written";
+  else
+    m << "stability check impossible at load factor " << s.loadFactor << ": the tangent is not symmetric or its LDL^T failed";
+  return m.str();
+}
+
+void ArcConsole::accepted(const StepInfo& s) {
+  if (!speak_) return;
+  CoutFormat keep;
+  const auto& rec = s.record;
+  std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(6) << s.loadFactor
+            << "  arc " << std::scientific << std::setprecision(3) << rec.arcLength << "  corrector " << std::setw(2)
+            << s.result.iterations << "  residual " << s.result.residuals.back()
+            << (deflection_ ? "  deflection " + std::to_string(arc_.monitorHistory().back()) : std::string())
+            << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
+            << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::endl;
+}
+
 }  // namespace perinox

@@ -3,10 +3,8 @@
 // stepping and of arc-length continuation, and the stability check; the probe values and the
 // error against a scene's reference they and the summary use.
 #include <Thyra_VectorBase.hpp>
-#include <iomanip>
 #include <ios>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,7 +17,6 @@ namespace perinox {
 
 /// Seconds of a steady clock (differences are wall times).
 double wallSeconds();
-
 
 /// Progress lines set fixed or scientific formats and precisions on std::cout; this restores the
 /// stream's format when the line's scope ends, so no line inherits another's (a load factor
@@ -71,22 +68,7 @@ class ConsoleLines final : public StepObserver {
   void note(const std::string& line) override {
     if (speak_) std::cout << line << "\n";
   }
-  void accepted(const StepInfo& s) override {
-    if (!speak_) return;
-    CoutFormat keep;
-    const auto& nr = s.result;
-    const auto& rec = s.record;
-    std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(4) << s.loadFactor
-              << (adr_ ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
-              << (adr_ ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
-              << std::scientific << std::setprecision(3)
-              << (nr.residuals.empty() ? 0.0 : (adr_ ? nr.residuals.front() : nr.residuals.back())) << (adr_ ? ", " : "")
-              << (adr_ ? std::to_string(nr.residuals.back()) : std::string())
-              << (rec.krylovIterations > 0 ? "  krylov " + std::to_string(rec.krylovIterations) : std::string())
-              << (rec.linearFailures > 0 ? "  unconverged linear solves " + std::to_string(rec.linearFailures) : std::string())
-              << "  " << std::fixed << std::setprecision(2) << rec.elapsed << " s"
-              << (nr.atRoundoffFloor ? "  (at the round-off floor)" : "") << std::endl;  // flushed: a log can be followed
-  }
+  void accepted(const StepInfo& s) override;
 
  private:
   bool adr_, speak_;
@@ -97,18 +79,7 @@ class ConsoleLines final : public StepObserver {
 class StabilityCheck final : public StepObserver {
  public:
   explicit StabilityCheck(PeridynamicEvaluator& ev) : ev_(ev) {}
-  std::string vet(const StepInfo& s, double previous) override {
-    const int neg = ev_.negativePivots(s.x);
-    if (neg == 0) return "";
-    std::ostringstream m;
-    if (neg > 0)
-      m << "loss of stability: the equilibrium found at load factor " << s.loadFactor << " is unstable (the tangent has "
-        << neg << " negative pivot(s)): the path passed a bifurcation or limit point between load factors " << previous
-        << " and " << s.loadFactor << "; the last stable state is written";
-    else
-      m << "stability check impossible at load factor " << s.loadFactor << ": the tangent is not symmetric or its LDL^T failed";
-    return m.str();
-  }
+  std::string vet(const StepInfo& s, double previous) override;
 
  private:
   PeridynamicEvaluator& ev_;
@@ -122,17 +93,7 @@ class ArcConsole final : public StepObserver {
   void note(const std::string& line) override {
     if (speak_) std::cout << line << "\n";
   }
-  void accepted(const StepInfo& s) override {
-    if (!speak_) return;
-    CoutFormat keep;
-    const auto& rec = s.record;
-    std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(6) << s.loadFactor
-              << "  arc " << std::scientific << std::setprecision(3) << rec.arcLength << "  corrector " << std::setw(2)
-              << s.result.iterations << "  residual " << s.result.residuals.back()
-              << (deflection_ ? "  deflection " + std::to_string(arc_.monitorHistory().back()) : std::string())
-              << (rec.negativePivots >= 0 ? "  negative pivots " + std::to_string(rec.negativePivots) : "") << "  "
-              << std::fixed << std::setprecision(2) << rec.elapsed << " s" << std::endl;
-  }
+  void accepted(const StepInfo& s) override;
 
  private:
   const ArcLengthStepper& arc_;
