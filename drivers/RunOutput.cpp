@@ -291,6 +291,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   j["matrix_bytes"] = facts.matrixBytes;
   j["peak_rss_mib_max_rank"] = facts.rssMax;
   j["peak_rss_mib_all_ranks"] = facts.rssSum;
+  j["partition"] = facts.partition;
   j["method"] = scene.solver.method;
   j["tolerance"] = scene.solver.tolerance;
   json steps = json::array();

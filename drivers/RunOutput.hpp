@@ -26,6 +26,7 @@ struct RunFacts {
   // of three), the unit of the machine-independent cost ratios in docs/performance.md.
   double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
   TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
+  nlohmann::json partition;        // the partition: method, owned and ghost particles per rank
 };
 
 /// This rank's particles (fields_<rank>.vtu when vtk, rank 0 the PVTU index; fields_<rank>.csv.part) into dir.

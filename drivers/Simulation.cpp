@@ -82,6 +82,17 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
   Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, rss, Teuchos::outArg(facts.rssSum));
   long long bytes = static_cast<long long>(ev.matrixBytes());
   Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, bytes, Teuchos::outArg(facts.matrixBytes));
+  // Per rank: owned and ghost particles (what each halo exchange brings in) and peak memory.
+  const LocalParticles& lp = ev.model().particles();
+  const double mine[3] = {static_cast<double>(lp.numOwned), static_cast<double>(lp.size() - lp.numOwned), rss};
+  double most[3], least[3], sum[3];
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, mine, most);
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, 3, mine, least);
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, 3, mine, sum);
+  facts.partition = {{"method", partitionName(ev.problem().partition)},
+                     {"owned_max", most[0]}, {"owned_min", least[0]},
+                     {"ghosts_max", most[1]}, {"ghosts_min", least[1]}, {"ghosts_mean", sum[1] / comm.getSize()},
+                     {"peak_rss_mib_min_rank", least[2]}};
 }
 
 /// The scene's Newton controls.

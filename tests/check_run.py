@@ -80,6 +80,8 @@ def main():
     ap.add_argument("--png", nargs="+", default=[])
     ap.add_argument("--linear-failures", choices=["none", "some"],
                     help="with --work-counts: no linear solve, or at least one, recorded as unconverged")
+    ap.add_argument("--partition", choices=["RCB", "Multi-Jagged", "Slabs"],
+                    help="the run's particles were split by this method, every rank owning some")
     ap.add_argument("--floor", type=float, default=FLOOR,
                     help="round-off floor of the normalised residual for --quadratic")
     a = ap.parse_args(argv[:split])
@@ -143,6 +145,17 @@ def main():
             print(f"hydrostatic curve: largest relative deviation {worst:.4f} over {len(s['probes'][name])} steps")
             if worst > rtol:
                 fail(f"deviation {worst} from the analytic curve exceeds {rtol}")
+    if a.partition:
+        with open(os.path.join(a.out, "summary.json")) as f:
+            s = json.load(f)
+        part = s.get("partition", {})
+        print(f"partition: {part}")
+        if part.get("method") != a.partition:
+            fail(f"the run was partitioned by {part.get('method')}, expected {a.partition}")
+        if not part.get("owned_min", 0) > 0:
+            fail("a rank owned no particles")
+        if (s["ranks"] > 1) != (part.get("ghosts_max", 0) > 0):
+            fail(f"{part.get('ghosts_max')} ghosts on {s['ranks']} ranks")
     if a.work_counts:
         with open(os.path.join(a.out, "summary.json")) as f:
             s = json.load(f)

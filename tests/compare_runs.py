@@ -8,6 +8,7 @@ largest magnitude of that probe), and the runs must have the same load factors. 
 multiplies the other runs' probes by S first (e.g. 1000 to compare metres with millimetres).
 """
 import argparse
+import csv
 import json
 import os
 import sys
@@ -16,6 +17,13 @@ import sys
 def load(d):
     with open(os.path.join(d, "summary.json")) as f:
         return json.load(f)
+
+
+def damage_index(d):
+    """Particle id -> damage index of the final state (fields.csv)."""
+    with open(os.path.join(d, "fields.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {int(r["id"]): float(r["damage"]) for r in rows}
 
 
 def main():
@@ -29,6 +37,9 @@ def main():
                     help="also require the same load steps and Newton iterations per step")
     ap.add_argument("--load-factor-tol", type=float, default=1e-14,
                     help="load factors must agree to this (absolute); arc-length runs solve for them")
+    ap.add_argument("--same-damage", action="store_true",
+                    help="also require the same bonds broken in every step and the same damage index "
+                         "of every particle (fields.csv, to 1e-12)")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     ref = load(a.dirs[0])
@@ -57,7 +68,18 @@ def main():
             if its != other_its:
                 print(f"FAILED: Newton iterations differ in {d}")
                 sys.exit(1)
-        print(f"{d}: ranks {s['ranks']}")
+        if a.same_damage:
+            broken = [st["broken_bonds"] for st in ref["steps"]]
+            other_broken = [st["broken_bonds"] for st in s["steps"]]
+            if broken != other_broken:
+                print(f"FAILED: bonds broken per step differ in {d}: {broken} and {other_broken}")
+                sys.exit(1)
+            mine, theirs = damage_index(a.dirs[0]), damage_index(d)
+            if mine.keys() != theirs.keys() or any(abs(mine[k] - theirs[k]) > 1e-12 for k in mine):
+                print(f"FAILED: the damage index of some particle differs in {d}")
+                sys.exit(1)
+            print(f"{d}: {sum(broken)} bonds broken in the same steps, damage index equal at {len(mine)} particles")
+        print(f"{d}: ranks {s['ranks']}, partition {s.get('partition', {}).get('method')}")
     print(f"largest relative difference {worst:.3e} (tolerance {a.rtol})")
     if worst > a.rtol:
         print("FAILED")

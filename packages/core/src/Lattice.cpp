@@ -2,6 +2,7 @@
 // fictitious (Dirichlet) layers outside chosen sides, optional deterministic jitter.
 #include "perinox/core/Discretization.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -91,28 +92,75 @@ bool insideHole(const Hole& h, const Vec3& x, int dim) {
   return true;
 }
 
-}  // namespace
+/// The lattice's index ranges and layer bits: what every site-range pass shares.
+struct SiteRange {
+  int dim = 1;
+  double dx = 0.0;
+  int begin[3] = {0, 0, 0}, end[3] = {1, 1, 1};
+  std::int64_t total = 1;  // sites, fictitious layers included, before holes
+};
 
-Discretization buildLattice(const LatticeSpec& spec) {
-  const double dx = validateAndSpacing(spec);
-  const int dim = spec.dim;
-
+SiteRange siteRange(const LatticeSpec& spec) {
+  SiteRange r;
+  r.dx = validateAndSpacing(spec);
+  r.dim = spec.dim;
   // Number of fictitious rows: enough to cover the horizon of the outermost real particle.
   // The 1e-9 guards horizon factors that are integers up to rounding (e.g. 3.0).
   const int nL = static_cast<int>(std::floor(spec.horizonFactor + 1e-9));
   unsigned sideBits = 0;
   for (Side s : spec.fictitiousSides) sideBits |= 1u << static_cast<int>(s);
-
   // Extended index range per axis: [begin, end) with real sites in [0, counts).
-  int begin[3] = {0, 0, 0}, end[3] = {1, 1, 1};
-  std::int64_t total = 1;
-  for (int a = 0; a < dim; ++a) {
-    begin[a] = (sideBits >> (2 * a)) & 1u ? -nL : 0;
-    end[a] = spec.counts[a] + ((sideBits >> (2 * a + 1)) & 1u ? nL : 0);
-    total *= end[a] - begin[a];
+  for (int a = 0; a < r.dim; ++a) {
+    r.begin[a] = (sideBits >> (2 * a)) & 1u ? -nL : 0;
+    r.end[a] = spec.counts[a] + ((sideBits >> (2 * a + 1)) & 1u ? nL : 0);
+    r.total *= r.end[a] - r.begin[a];
   }
-  if (total > INT_MAX) fail("lattice has too many sites (" + std::to_string(total) + ")");
+  if (r.total > INT_MAX) fail("lattice has too many sites (" + std::to_string(r.total) + ")");
+  return r;
+}
 
+/// Visits the kept sites with index in [first, last) in id order (lexicographic, x fastest:
+/// contiguous id blocks are compact in space): f(x, sideMask), holes cut from real sites.
+template <class F>
+void forEachSite(const LatticeSpec& spec, const SiteRange& r, std::int64_t first, std::int64_t last, F&& f) {
+  const std::int64_t nx = r.end[0] - r.begin[0], ny = r.end[1] - r.begin[1];
+  for (std::int64_t k = first; k < last; ++k) {
+    const int idx[3] = {static_cast<int>(k % nx) + r.begin[0], static_cast<int>((k / nx) % ny) + r.begin[1],
+                        static_cast<int>(k / (nx * ny)) + r.begin[2]};
+    Vec3 x = Vec3::Zero();
+    std::uint8_t mask = 0;
+    for (int a = 0; a < r.dim; ++a) {
+      x[a] = spec.lower[a] + (idx[a] + 0.5) * r.dx;
+      if (idx[a] < 0) mask |= 1u << (2 * a);
+      if (idx[a] >= spec.counts[a]) mask |= 1u << (2 * a + 1);
+    }
+    if (mask == 0) {
+      bool cut = false;
+      for (const Hole& h : spec.holes) cut = cut || insideHole(h, x, r.dim);
+      if (cut) continue;
+    }
+    f(x, mask);
+  }
+}
+
+}  // namespace
+
+std::int64_t latticeSiteCount(const LatticeSpec& spec) { return siteRange(spec).total; }
+
+LatticeSiteCounts countLatticeSites(const LatticeSpec& spec, std::int64_t first, std::int64_t last) {
+  const SiteRange r = siteRange(spec);
+  LatticeSiteCounts c;
+  forEachSite(spec, r, first, last, [&](const Vec3&, std::uint8_t mask) {
+    ++c.particles;
+    if (mask == 0) ++c.real;
+  });
+  return c;
+}
+
+Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::int64_t last, std::int64_t realBefore) {
+  const SiteRange r = siteRange(spec);
+  const int dim = spec.dim;
+  const double dx = r.dx;
   Discretization d;
   d.dim = dim;
   d.dx = dx;
@@ -124,43 +172,22 @@ Discretization buildLattice(const LatticeSpec& spec) {
     d.boxLower[a] = spec.lower[a];
     d.boxUpper[a] = spec.upper[a];
   }
-  d.X.reserve(total);
-  d.fictitious.reserve(total);
-  d.sideMask.reserve(total);
+  d.X.reserve(static_cast<std::size_t>(last - first));
+  d.fictitious.reserve(static_cast<std::size_t>(last - first));
+  d.sideMask.reserve(static_cast<std::size_t>(last - first));
+  forEachSite(spec, r, first, last, [&](const Vec3& x, std::uint8_t mask) {
+    d.X.push_back(x);
+    d.fictitious.push_back(mask != 0 ? 1 : 0);
+    d.sideMask.push_back(mask);
+  });
 
-  // Lexicographic order with x fastest: contiguous id blocks are compact in space.
-  std::int64_t nReal = 0;
-  int idx[3];
-  for (idx[2] = begin[2]; idx[2] < end[2]; ++idx[2]) {
-    for (idx[1] = begin[1]; idx[1] < end[1]; ++idx[1]) {
-      for (idx[0] = begin[0]; idx[0] < end[0]; ++idx[0]) {
-        Vec3 x = Vec3::Zero();
-        std::uint8_t mask = 0;
-        for (int a = 0; a < dim; ++a) {
-          x[a] = spec.lower[a] + (idx[a] + 0.5) * dx;
-          if (idx[a] < 0) mask |= 1u << (2 * a);
-          if (idx[a] >= spec.counts[a]) mask |= 1u << (2 * a + 1);
-        }
-        const bool fict = mask != 0;
-        if (!fict) {
-          bool cut = false;
-          for (const Hole& h : spec.holes) cut = cut || insideHole(h, x, dim);
-          if (cut) continue;
-          ++nReal;
-        }
-        d.X.push_back(x);
-        d.fictitious.push_back(fict ? 1 : 0);
-        d.sideMask.push_back(mask);
-      }
-    }
-  }
-  if (nReal == 0) fail("no real particle left in the lattice after cutting the holes");
-
-  // Jitter of real particles, in id order. The uniform variate is mapped by hand from the raw
+  // Jitter of real particles, in id order: the real particles before this range drew dim
+  // variates each from the same stream. The uniform variate is mapped by hand from the raw
   // 32-bit mt19937 output (u = k / 2^32 in [0, 1)) because std::uniform_real_distribution is
   // not guaranteed to produce the same sequence across standard libraries.
   if (spec.jitter > 0.0) {
     std::mt19937 gen(spec.jitterSeed);
+    gen.discard(static_cast<unsigned long long>(realBefore) * dim);
     const double amp = spec.jitter * dx;  // full width of the shift interval
     for (std::size_t i = 0; i < d.X.size(); ++i) {
       if (d.fictitious[i]) continue;
@@ -176,7 +203,14 @@ Discretization buildLattice(const LatticeSpec& spec) {
                                        : dx * dx * dx;
   d.volume.assign(d.X.size(), cellVolume);
   d.block.assign(d.X.size(), 1);
+  return d;
+}
 
+Discretization buildLattice(const LatticeSpec& spec) {
+  const std::int64_t sites = latticeSiteCount(spec);
+  Discretization d = latticeSites(spec, 0, sites, 0);
+  if (std::count(d.fictitious.begin(), d.fictitious.end(), 0) == 0)
+    fail("no real particle left in the lattice after cutting the holes");
   buildFamilies(d);
   return d;
 }

@@ -168,13 +168,22 @@ std::vector<long long> DamageBookkeeping::unanchoredParticles() const {
 }
 
 std::vector<long long> DamageBookkeeping::onAnyRank(const std::vector<long long>& mine) const {
-  const long long n = problem_.disc.size();
-  std::vector<int> flag(n, 0), all(n, 0);
-  for (long long g : mine) flag[g] = 1;
-  Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, static_cast<int>(n), flag.data(), all.data());
+  // Every rank's list gathered to every rank: the lists are short (the particles detached in one
+  // round), so this sends O(their length), not a flag per particle of the body.
+  const int ranks = comm_->getSize();
+  int count = static_cast<int>(mine.size());
+  std::vector<int> counts(ranks, 0);
+  Teuchos::gatherAll(*comm_, 1, &count, ranks, counts.data());
+  const int most = *std::max_element(counts.begin(), counts.end());
   std::vector<long long> ids;
-  for (long long g = 0; g < n; ++g)
-    if (all[g]) ids.push_back(g);
+  if (most == 0) return ids;
+  std::vector<long long> padded(static_cast<std::size_t>(most), -1), all(static_cast<std::size_t>(most) * ranks, -1);
+  std::copy(mine.begin(), mine.end(), padded.begin());
+  Teuchos::gatherAll(*comm_, most, padded.data(), static_cast<int>(all.size()), all.data());
+  for (long long g : all)
+    if (g >= 0) ids.push_back(g);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   return ids;
 }
 

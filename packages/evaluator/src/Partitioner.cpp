@@ -1,8 +1,9 @@
-// Zoltan2 behind perinox's partition choice (the only translation unit with Zoltan2's headers).
+// Zoltan2 behind perinox's partition choice, and the distributed lattice construction (the only
+// translation unit with Zoltan2's headers).
 #include "perinox/evaluator/Partitioner.hpp"
 
+#include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
-#include <Teuchos_DefaultSerialComm.hpp>
 #include <Zoltan2_BasicVectorAdapter.hpp>
 #include <Zoltan2_PartitioningProblem.hpp>
 #include <mpi.h>
@@ -18,15 +19,15 @@ namespace {
 using Types = Zoltan2::BasicUserTypes<double, int, long long>;
 using Adapter = Zoltan2::BasicVectorAdapter<Types>;
 
-/// Zoltan2's part for each particle of the id range [begin, end), for `parts` parts over comm.
-std::vector<int> geometricParts(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Discretization& d,
-                                long long begin, long long end, PartitionMethod method, int parts) {
-  const int n = static_cast<int>(end - begin), D = d.dim;
-  std::vector<long long> ids(static_cast<std::size_t>(n));
-  std::iota(ids.begin(), ids.end(), begin);
+/// Zoltan2's part for each of the given particles (this rank's share of the points), for
+/// `parts` parts over comm.
+std::vector<int> geometricParts(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, int D,
+                                const std::vector<long long>& ids, const std::vector<Vec3>& X, PartitionMethod method,
+                                int parts) {
+  const int n = static_cast<int>(ids.size());
   std::vector<double> coord(static_cast<std::size_t>(n) * D);
   for (int l = 0; l < n; ++l)
-    for (int a = 0; a < D; ++a) coord[static_cast<std::size_t>(a) * n + l] = d.X[begin + l][a];
+    for (int a = 0; a < D; ++a) coord[static_cast<std::size_t>(a) * n + l] = X[l][a];
   std::vector<const double*> entries;
   std::vector<int> strides(static_cast<std::size_t>(D), 1);
   for (int a = 0; a < D; ++a) entries.push_back(coord.data() + static_cast<std::size_t>(a) * n);
@@ -38,6 +39,8 @@ std::vector<int> geometricParts(const Teuchos::RCP<const Teuchos::Comm<int>>& co
   params.set("num_global_parts", parts);
   params.set("imbalance_tolerance", 1.01);
   params.set("error_check_level", "no_assertions");
+  // Zoltan2's "rcb" runs Zoltan's RCB, which prints its parameters unless told not to.
+  params.sublist("zoltan_parameters").set("debug_level", "0");
   Zoltan2::PartitioningProblem<Adapter> problem(&adapter, &params, comm);
   problem.solve();
   const int* part = problem.getSolution().getPartListView();
@@ -51,6 +54,67 @@ MPI_Comm rawComm(const Teuchos::Comm<int>& comm) {
   return mpi ? static_cast<MPI_Comm>((*mpi->getRawMpiComm())()) : MPI_COMM_SELF;
 }
 
+/// Sends records of `width` values to ranks: record k (values[k*width ..]) to rank to[k]. Returns
+/// what this rank receives, in rank order.
+template <class T>
+std::vector<T> exchange(const Teuchos::Comm<int>& comm, const std::vector<T>& values, int width,
+                        const std::vector<int>& to) {
+  const int ranks = comm.getSize();
+  std::vector<int> sendCount(ranks, 0), recvCount(ranks, 0), sendOffset(ranks, 0), recvOffset(ranks, 0);
+  for (int q : to) sendCount[q] += width;
+  std::partial_sum(sendCount.begin(), sendCount.end() - 1, sendOffset.begin() + 1);
+  std::vector<T> send(values.size());
+  std::vector<int> fill = sendOffset;
+  for (std::size_t k = 0; k < to.size(); ++k) {
+    std::copy_n(values.begin() + static_cast<std::ptrdiff_t>(k * width), width, send.begin() + fill[to[k]]);
+    fill[to[k]] += width;
+  }
+  const MPI_Comm mc = rawComm(comm);
+  MPI_Alltoall(sendCount.data(), 1, MPI_INT, recvCount.data(), 1, MPI_INT, mc);
+  std::partial_sum(recvCount.begin(), recvCount.end() - 1, recvOffset.begin() + 1);
+  std::vector<T> recv(static_cast<std::size_t>(recvOffset.back() + recvCount.back()));
+  const MPI_Datatype type = std::is_same<T, double>::value ? MPI_DOUBLE : MPI_LONG_LONG;
+  MPI_Alltoallv(send.data(), sendCount.data(), sendOffset.data(), type, recv.data(), recvCount.data(), recvOffset.data(),
+                type, mc);
+  return recv;
+}
+
+void requireEveryRankOwns(const Teuchos::Comm<int>& comm, std::size_t owned, long long n, PartitionMethod method) {
+  long long mine = static_cast<long long>(owned), fewest = 0;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, 1, &mine, &fewest);
+  if (fewest == 0)
+    throw std::invalid_argument("Discretization/Partition = " + std::string(partitionName(method)) +
+                                " left a rank without particles (" + std::to_string(n) + " particles on " +
+                                std::to_string(comm.getSize()) + " ranks): run on fewer ranks");
+}
+
+/// A particle as it travels between ranks: id, X (3), volume, fictitious, side mask, block.
+constexpr int kRecord = 8;
+
+void pack(std::vector<double>& out, long long id, const Discretization& d, std::size_t i) {
+  const double r[kRecord] = {static_cast<double>(id), d.X[i][0], d.X[i][1], d.X[i][2], d.volume[i],
+                             static_cast<double>(d.fictitious[i]), static_cast<double>(d.sideMask[i]),
+                             static_cast<double>(d.block[i])};
+  out.insert(out.end(), r, r + kRecord);
+}
+
+/// Unpacks records into particles sorted by id: ids[k], d's arrays (no families).
+void unpackSorted(const std::vector<double>& recs, Discretization& d, std::vector<long long>& ids) {
+  const std::size_t m = recs.size() / kRecord;
+  std::vector<std::size_t> order(m);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return recs[a * kRecord] < recs[b * kRecord]; });
+  for (std::size_t k : order) {
+    const double* r = &recs[k * kRecord];
+    ids.push_back(static_cast<long long>(r[0]));
+    d.X.emplace_back(r[1], r[2], r[3]);
+    d.volume.push_back(r[4]);
+    d.fictitious.push_back(static_cast<std::uint8_t>(r[5]));
+    d.sideMask.push_back(static_cast<std::uint8_t>(r[6]));
+    d.block.push_back(static_cast<int>(r[7]));
+  }
+}
+
 }  // namespace
 
 std::vector<long long> ownedParticles(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Discretization& d,
@@ -58,34 +122,14 @@ std::vector<long long> ownedParticles(const Teuchos::RCP<const Teuchos::Comm<int
   const long long n = d.size();
   const int ranks = comm->getSize(), rank = comm->getRank();
   const long long begin = partitionBegin(n, ranks, rank), end = partitionBegin(n, ranks, rank + 1);
-  std::vector<long long> owned;
-  if (ranks == 1 || method == PartitionMethod::Slabs) {
-    owned.resize(static_cast<std::size_t>(end - begin));
-    std::iota(owned.begin(), owned.end(), begin);
-    return owned;
-  }
+  std::vector<long long> slab(static_cast<std::size_t>(end - begin));
+  std::iota(slab.begin(), slab.end(), begin);
+  if (ranks == 1 || method == PartitionMethod::Slabs) return slab;
   // Part q goes to rank q: each slab owner sends its particles' ids to their parts' ranks.
-  const std::vector<int> part = geometricParts(comm, d, begin, end, method, ranks);
-  std::vector<int> sendCount(static_cast<std::size_t>(ranks), 0), recvCount(static_cast<std::size_t>(ranks), 0);
-  for (int q : part) ++sendCount[q];
-  std::vector<int> sendOffset(static_cast<std::size_t>(ranks), 0), recvOffset(static_cast<std::size_t>(ranks), 0);
-  std::partial_sum(sendCount.begin(), sendCount.end() - 1, sendOffset.begin() + 1);
-  std::vector<long long> send(part.size());
-  std::vector<int> fill = sendOffset;
-  for (std::size_t l = 0; l < part.size(); ++l) send[fill[part[l]]++] = begin + static_cast<long long>(l);
-  const MPI_Comm mc = rawComm(*comm);
-  MPI_Alltoall(sendCount.data(), 1, MPI_INT, recvCount.data(), 1, MPI_INT, mc);
-  std::partial_sum(recvCount.begin(), recvCount.end() - 1, recvOffset.begin() + 1);
-  owned.resize(static_cast<std::size_t>(recvOffset.back() + recvCount.back()));
-  MPI_Alltoallv(send.data(), sendCount.data(), sendOffset.data(), MPI_LONG_LONG, owned.data(), recvCount.data(),
-                recvOffset.data(), MPI_LONG_LONG, mc);
+  const std::vector<Vec3> X(d.X.begin() + begin, d.X.begin() + end);
+  std::vector<long long> owned = exchange(*comm, slab, 1, geometricParts(comm, d.dim, slab, X, method, ranks));
   std::sort(owned.begin(), owned.end());
-  long long mine = static_cast<long long>(owned.size()), fewest = 0;
-  Teuchos::reduceAll(*comm, Teuchos::REDUCE_MIN, 1, &mine, &fewest);
-  if (fewest == 0)
-    throw std::invalid_argument("Discretization/Partition = " + std::string(partitionName(method)) +
-                                " left a rank without particles (" + std::to_string(n) + " particles on " +
-                                std::to_string(ranks) + " ranks): run on fewer ranks");
+  requireEveryRankOwns(*comm, owned.size(), n, method);
   return owned;
 }
 
@@ -98,8 +142,150 @@ std::vector<int> partsOf(const Discretization& d, PartitionMethod method, int pa
       for (long long i = partitionBegin(n, parts, q); i < partitionBegin(n, parts, q + 1); ++i) part[i] = q;
     return part;
   }
-  auto self = Teuchos::rcp<const Teuchos::Comm<int>>(new Teuchos::SerialComm<int>());
-  return geometricParts(self, d, 0, n, method, parts);
+  auto self = Teuchos::rcp<const Teuchos::Comm<int>>(new Teuchos::MpiComm<int>(MPI_COMM_SELF));
+  std::vector<long long> ids(static_cast<std::size_t>(n));
+  std::iota(ids.begin(), ids.end(), 0LL);
+  return geometricParts(self, d.dim, ids, d.X, method, parts);
+}
+
+namespace {
+
+/// The id slab (rank) of particle id among n on `ranks` ranks.
+int slabOf(long long id, long long n, int ranks) {
+  int q = static_cast<int>((static_cast<double>(id) * ranks) / static_cast<double>(std::max(n, 1LL)));
+  q = std::min(std::max(q, 0), ranks - 1);
+  while (q > 0 && id < partitionBegin(n, ranks, q)) --q;
+  while (q + 1 < ranks && id >= partitionBegin(n, ranks, q + 1)) ++q;
+  return q;
+}
+
+/// d's scalars (dimension, spacing, horizon, box) without particles.
+Discretization emptyLike(const Discretization& d) {
+  Discretization e;
+  e.dim = d.dim, e.dx = d.dx, e.horizon = d.horizon, e.thickness = d.thickness;
+  e.boxLower = d.boxLower, e.boxUpper = d.boxUpper;
+  return e;
+}
+
+/// Particles with their ids, in id order.
+struct Share {
+  Discretization d;
+  std::vector<long long> ids;
+};
+
+Share receiveSorted(const Teuchos::Comm<int>& comm, const Discretization& like, const std::vector<double>& recs,
+                    const std::vector<int>& to) {
+  Share s{emptyLike(like), {}};
+  unpackSorted(exchange(comm, recs, kRecord, to), s.d, s.ids);
+  return s;
+}
+
+/// 1-2: this rank's slab of lattice sites generated (ids and the jitter's random stream continued
+/// by prefix sums of the slabs' counts), sent to the id slabs (so that Zoltan2 sees what
+/// ownedParticles gives it and cuts the same parts), then to the parts. n: the lattice's size.
+Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const LatticeSpec& spec, PartitionMethod method,
+                 long long& n) {
+  const int ranks = comm->getSize(), rank = comm->getRank();
+  const MPI_Comm mc = rawComm(*comm);
+  const std::int64_t sites = latticeSiteCount(spec);
+  const std::int64_t first = sites * rank / ranks, last = sites * (rank + 1) / ranks;
+  const LatticeSiteCounts mine = countLatticeSites(spec, first, last);
+  long long counts[2] = {mine.particles, mine.real}, before[2] = {0, 0}, total[2] = {0, 0};
+  MPI_Exscan(counts, before, 2, MPI_LONG_LONG, MPI_SUM, mc);
+  if (rank == 0) before[0] = before[1] = 0;  // MPI_Exscan leaves rank 0's result undefined
+  MPI_Allreduce(counts, total, 2, MPI_LONG_LONG, MPI_SUM, mc);
+  if (total[1] == 0) throw std::invalid_argument("no real particle left in the lattice after cutting the holes");
+  n = total[0];
+  const Discretization slab = latticeSites(spec, first, last, before[1]);
+  std::vector<double> recs;
+  std::vector<int> to;
+  for (std::size_t i = 0; i < slab.X.size(); ++i) {
+    const long long id = before[0] + static_cast<long long>(i);
+    pack(recs, id, slab, i);
+    to.push_back(slabOf(id, n, ranks));
+  }
+  Share share = receiveSorted(*comm, slab, recs, to);
+  if (method == PartitionMethod::Slabs || ranks == 1) return share;
+  const std::vector<int> part = geometricParts(comm, spec.dim, share.ids, share.d.X, method, ranks);
+  recs.clear();
+  for (std::size_t i = 0; i < share.ids.size(); ++i) pack(recs, share.ids[i], share.d, i);
+  return receiveSorted(*comm, slab, recs, part);
+}
+
+/// 3: owned + the particles other ranks own within one cell-list width of this rank's owned
+/// bounding box (every rank's box is a small table of 2 x 3 numbers per rank), in id order.
+Share withNeighbours(const Teuchos::Comm<int>& comm, const Share& owned) {
+  const int ranks = comm.getSize(), rank = comm.getRank();
+  const Discretization& d = owned.d;
+  const double reach = d.horizon * (1.0 + 1e-9);
+  std::vector<double> box(6, 0.0), boxes(static_cast<std::size_t>(6 * ranks));
+  for (int a = 0; a < 3; ++a) box[a] = box[3 + a] = d.X[0][a];
+  for (const Vec3& x : d.X)
+    for (int a = 0; a < 3; ++a) box[a] = std::min(box[a], x[a]), box[3 + a] = std::max(box[3 + a], x[a]);
+  MPI_Allgather(box.data(), 6, MPI_DOUBLE, boxes.data(), 6, MPI_DOUBLE, rawComm(comm));
+  std::vector<double> recs;
+  std::vector<int> to;
+  for (int q = 0; q < ranks; ++q) {
+    const double* b = &boxes[static_cast<std::size_t>(6 * q)];
+    for (std::size_t i = 0; i < owned.ids.size(); ++i) {
+      bool inside = q != rank;
+      for (int a = 0; a < d.dim; ++a) inside = inside && d.X[i][a] >= b[a] - reach && d.X[i][a] <= b[3 + a] + reach;
+      if (inside) pack(recs, owned.ids[i], d, i), to.push_back(q);
+    }
+  }
+  std::vector<double> all = exchange(comm, recs, kRecord, to);
+  for (std::size_t i = 0; i < owned.ids.size(); ++i) pack(all, owned.ids[i], d, i);
+  Share near{emptyLike(d), {}};
+  unpackSorted(all, near.d, near.ids);
+  return near;
+}
+
+}  // namespace
+
+LocalLattice buildLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const LatticeSpec& spec,
+                               PartitionMethod method) {
+  LocalLattice out;
+  const Share owned = ownedShare(comm, spec, method, out.globalCount);
+  requireEveryRankOwns(*comm, owned.ids.size(), out.globalCount, method);
+  // 4. Families: the cell-list search over owned + neighbours in id order (the whole lattice's
+  //    distance test and family order), kept for the owned particles; the neighbours in an owned
+  //    family are the ghosts.
+  Share near = withNeighbours(*comm, owned);
+  buildFamilies(near.d);
+  const Discretization& nd = near.d;
+  std::vector<int> ownedNear;  // index in near of each owned particle
+  for (std::size_t k = 0, o = 0; k < near.ids.size(); ++k)
+    if (o < owned.ids.size() && near.ids[k] == owned.ids[o]) ownedNear.push_back(static_cast<int>(k)), ++o;
+  std::vector<int> ghostNear;
+  for (int k : ownedNear)
+    for (auto q = nd.familyOffset[k]; q < nd.familyOffset[k + 1]; ++q)
+      if (!std::binary_search(owned.ids.begin(), owned.ids.end(), near.ids[nd.familyIndex[q]]))
+        ghostNear.push_back(nd.familyIndex[q]);
+  std::sort(ghostNear.begin(), ghostNear.end());
+  ghostNear.erase(std::unique(ghostNear.begin(), ghostNear.end()), ghostNear.end());
+  std::vector<int> local = ownedNear, localOfNear(near.ids.size(), -1);
+  local.insert(local.end(), ghostNear.begin(), ghostNear.end());
+  LocalParticles& lp = out.particles;
+  lp.dim = spec.dim;
+  lp.numOwned = static_cast<int>(owned.ids.size());
+  for (std::size_t l = 0; l < local.size(); ++l) {
+    const int k = local[l];
+    localOfNear[k] = static_cast<int>(l);
+    lp.globalId.push_back(near.ids[k]);
+    lp.X.push_back(nd.X[k]);
+    lp.volume.push_back(nd.volume[k]);
+    out.fictitious.push_back(nd.fictitious[k]);
+    out.sideMask.push_back(nd.sideMask[k]);
+    out.block.push_back(nd.block[k]);
+  }
+  lp.famOffset.push_back(0);
+  for (int k : ownedNear) {
+    for (auto q = nd.familyOffset[k]; q < nd.familyOffset[k + 1]; ++q) lp.famIndex.push_back(localOfNear[nd.familyIndex[q]]);
+    lp.famOffset.push_back(static_cast<std::int64_t>(lp.famIndex.size()));
+  }
+  out.heldParticles = nd.X.size();
+  out.heldBonds = static_cast<std::size_t>(nd.familyOffset.back());
+  return out;
 }
 
 }  // namespace perinox

@@ -66,6 +66,19 @@ struct Discretization {
 /// horizon below the spacing, no particle left after holes, ...).
 Discretization buildLattice(const LatticeSpec& spec);
 
+/// The pieces of buildLattice, for building a lattice in parts (one MPI rank's share): sites are
+/// numbered lexicographically (x fastest) over the lattice with its fictitious layers, before
+/// holes are cut; the particles keep that order.
+std::int64_t latticeSiteCount(const LatticeSpec& spec);
+struct LatticeSiteCounts {
+  std::int64_t particles = 0, real = 0;  // sites kept (holes cut), and of them real
+};
+/// The particles of the sites [first, last), counted without building them.
+LatticeSiteCounts countLatticeSites(const LatticeSpec& spec, std::int64_t first, std::int64_t last);
+/// The particles of the sites [first, last) (no families). realBefore: the real particles of the
+/// sites before `first`, so that the jitter continues the whole lattice's random stream.
+Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::int64_t last, std::int64_t realBefore);
+
 /// Reads a particle file: one particle per line "x y z volume [block]", '#' starts a comment,
 /// blank lines ignored. dim selects how many coordinates matter (the rest must still be present
 /// as columns x y z). dx is the nominal spacing (used for reports and horizon factors).

@@ -3,6 +3,7 @@
 // (recursive coordinate bisection or multi-jagged) of the particles' reference positions.
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
+#include <cstdint>
 #include <vector>
 
 #include "perinox/model/Partition.hpp"
@@ -19,5 +20,29 @@ std::vector<long long> ownedParticles(const Teuchos::RCP<const Teuchos::Comm<int
 /// The part of every particle when d is split into `parts` parts on this process alone (for
 /// benchmarks that compare partitions for rank counts the machine cannot run, docs/performance.md).
 std::vector<int> partsOf(const Discretization& d, PartitionMethod method, int parts);
+
+/// One rank's share of a lattice, built without an array of global size on any rank.
+struct LocalLattice {
+  /// Owned particles (sorted global ids, the same as ownedParticles on the whole lattice gives)
+  /// then their ghosts (family members owned elsewhere, sorted), families of the owned particles
+  /// in local ids: equal, entry for entry, to localParticles(buildLattice(spec), owned).
+  LocalParticles particles;
+  std::vector<std::uint8_t> fictitious, sideMask;  // per local particle
+  std::vector<int> block;                          // per local particle
+  long long globalCount = 0;                       // particles of the whole lattice
+  /// The most this rank held at once while building: particles (owned + the candidates within one
+  /// cell-list width of its box) and bonds (their families). Tests check these against the share.
+  std::size_t heldParticles = 0, heldBonds = 0;
+};
+
+/// Builds this rank's share of the lattice of spec (collective): each rank generates the lattice
+/// sites of its slab of site indices (ids and the jitter's random stream continued by prefix
+/// sums), sends them to their id slabs and then to their parts (Zoltan2, as ownedParticles), and
+/// receives as ghost candidates the particles other ranks own within one horizon of its owned
+/// bounding box; the families come from a cell-list search over owned + candidates.
+/// The first step of the distributed construction (docs/architecture.md, "What is still
+/// replicated"): the evaluator does not use it yet.
+LocalLattice buildLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const LatticeSpec& spec,
+                               PartitionMethod method);
 
 }  // namespace perinox
