@@ -69,13 +69,11 @@ std::string xmlDirectory() {
   return envOr("PERINOX_XML_DIR", useInstalled ? installed.lexically_normal().string() : PERINOX_SOURCE_DIR "/xml");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // Before Kokkos sees the arguments: it answers --help with its own options.
-  // Kokkos' own options are refused here too (perinox runs Kokkos' Serial back end and takes
-  // none of them): Kokkos would otherwise act on them, or print pages of help, before perinox could
-  // say anything. MPI is not up yet, so the launcher's rank decides who speaks.
+/// Before MPI and Kokkos see the arguments: --help (Kokkos answers it with its own options) and
+/// Kokkos' own options, refused (perinox runs Kokkos' Serial back end and takes none of them;
+/// Kokkos would otherwise act on them, or print pages of help, before perinox could say
+/// anything). MPI is not up yet, so the launcher's rank decides who speaks. -1: go on.
+int beforeMpi(int argc, char** argv) {
   const char* launcherRank = std::getenv("OMPI_COMM_WORLD_RANK");
   const bool speaker = !launcherRank || std::string(launcherRank) == "0";
   for (int i = 1; i < argc; ++i) {
@@ -90,94 +88,127 @@ int main(int argc, char** argv) {
         return 2;
       }
   }
-  Tpetra::ScopeGuard mpi(&argc, &argv);
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  const bool root = comm->getRank() == 0;
-  std::vector<std::string> args(argv + 1, argv + argc);
-  auto refuse = [&](const std::string& msg) {
-    if (root) std::cerr << "perinox: " << oneLine(msg) << "\n";
-    return 2;
-  };
-  if (args.empty()) return refuse("no command given; usage: perinox run SCENE.xml [options] (perinox --help lists them)");
-  if (args[0] == "schema") {
-    if (root) perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
-    return 0;
-  }
-  if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; usage: perinox run SCENE.xml [options] (perinox --help lists them)");
-  if (args.size() < 2) return refuse("'perinox run' needs a scene file: perinox run SCENE.xml [options]");
+  return -1;
+}
 
-  std::string scenePath = args[1];
+/// What `perinox run` was asked to do.
+struct RunCommand {
+  std::string scenePath;
   std::vector<std::string> overrides;
-  perinox::RunOptions opt;
+  perinox::RunOptions options;
+};
+
+/// --checkpoint-steps N or --checkpoint-seconds S into the options; "" or the refusal.
+std::string checkpointInterval(const std::string& flag, const std::string& text, perinox::RunOptions& opt) {
+  std::size_t used = 0;
+  double v = -1;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const bool steps = flag == "--checkpoint-steps";
+  if (used != text.size() || !(v > 0) || !std::isfinite(v) || (steps && (v > 1e9 || v != static_cast<int>(v))))
+    return flag + " needs a positive " + (steps ? "whole number" : "number") + ", not '" + text.substr(0, 40) + "'";
+  if (steps)
+    opt.checkpointSteps = static_cast<int>(v);
+  else
+    opt.checkpointSeconds = v;
+  return "";
+}
+
+/// `run SCENE [options]` (args[0] is "run"): "" or the sentence refusing them.
+std::string parseRun(const std::vector<std::string>& args, RunCommand& cmd) {
+  if (args.size() < 2) return "'perinox run' needs a scene file: perinox run SCENE.xml [options]";
+  cmd.scenePath = args[1];
+  perinox::RunOptions& opt = cmd.options;
   opt.outputDir = "";
   for (std::size_t i = 2; i < args.size(); ++i) {
-    if (args[i] == "--set" && i + 1 < args.size()) {
-      overrides.push_back(args[++i]);
-    } else if (args[i] == "--output" && i + 1 < args.size()) {
-      opt.outputDir = args[++i];
-    } else if (args[i] == "--quiet") {
+    const std::string& a = args[i];
+    const bool valued = a == "--set" || a == "--output" || a == "--checkpoint-dir" || a == "--restart" ||
+                        a == "--checkpoint-steps" || a == "--checkpoint-seconds";
+    if (a == "--quiet") {
       opt.quiet = true;
-    } else if ((args[i] == "--checkpoint-steps" || args[i] == "--checkpoint-seconds") && i + 1 < args.size()) {
-      const std::string flag = args[i], text = args[++i];
-      std::size_t used = 0;
-      double v = -1;
-      try {
-        v = std::stod(text, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      const bool steps = flag == "--checkpoint-steps";
-      if (used != text.size() || !(v > 0) || !std::isfinite(v) || (steps && (v > 1e9 || v != static_cast<int>(v)))) {
-        return refuse(flag + " needs a positive " + (steps ? "whole number" : "number") + ", not '" + text.substr(0, 40) + "'");
-      }
-      if (steps)
-        opt.checkpointSteps = static_cast<int>(v);
-      else
-        opt.checkpointSeconds = v;
-    } else if (args[i] == "--checkpoint-dir" && i + 1 < args.size()) {
+    } else if (valued && i + 1 == args.size()) {
+      return a + " needs a value";
+    } else if (!valued) {
+      return "unknown argument '" + a.substr(0, 60) + "' (perinox --help lists the options)";
+    } else if (a == "--set") {
+      cmd.overrides.push_back(args[++i]);
+    } else if (a == "--output") {
+      opt.outputDir = args[++i];
+    } else if (a == "--checkpoint-dir") {
       opt.checkpointDir = args[++i];
-    } else if (args[i] == "--restart" && i + 1 < args.size()) {
+    } else if (a == "--restart") {
       opt.restartFrom = args[++i];
-    } else if (args[i].rfind("--", 0) == 0 && i + 1 == args.size() &&
-               (args[i] == "--set" || args[i] == "--output" || args[i] == "--checkpoint-dir" || args[i] == "--restart" ||
-                args[i] == "--checkpoint-steps" || args[i] == "--checkpoint-seconds")) {
-      return refuse(args[i] + " needs a value");
+    } else if (const std::string bad = checkpointInterval(a, args[i + 1], opt); !bad.empty()) {
+      return bad;
     } else {
-      return refuse("unknown argument '" + args[i].substr(0, 60) + "' (perinox --help lists the options)");
+      ++i;
     }
   }
   if (opt.outputDir.empty()) {
-    std::string stem = scenePath.substr(scenePath.find_last_of('/') + 1);
+    std::string stem = cmd.scenePath.substr(cmd.scenePath.find_last_of('/') + 1);
     stem = stem.substr(0, stem.rfind('.'));
     opt.outputDir = "out/" + stem;
   }
-  const std::string xmlDir = xmlDirectory();
   // PERINOX_PLOT_SCRIPT set and empty: no plots (the tests' setting).
   const char* plotScript = std::getenv("PERINOX_PLOT_SCRIPT");
   opt.plotScript = plotScript ? plotScript : PERINOX_SOURCE_DIR "/drivers/plot_result.py";
+  return "";
+}
 
-  perinox::Scene scene;
+/// Runs the scene and writes its folder; the exit code. Errors of the set-up and the agreed ones
+/// (every rank throws the same sentence) end every rank with one sentence; anything else on one
+/// rank alone could leave the others waiting in a collective, so it ends the whole job.
+template <class Refuse>
+int runAndWrite(const perinox::Scene& scene, const RunCommand& cmd, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                const Refuse& refuse) {
   try {
-    scene = perinox::loadScene(scenePath, overrides, xmlDir + "/solvers");
-  } catch (const std::exception& e) {
-    return refuse(std::string("error: ") + e.what());
-  }
-  // Errors from here on: those of the set-up and the agreed ones (every rank throws the same
-  // sentence) end every rank with one sentence; anything else on one rank alone could leave the
-  // others waiting in a collective, so it ends the whole job.
-  try {
-    const auto r = perinox::runScene(scene, comm, opt);
-    return r.converged ? 0 : 3;
+    return perinox::runScene(scene, comm, cmd.options).converged ? 0 : 3;
   } catch (const perinox::OutputPathError& e) {
     return refuse(std::string("error: ") + e.what());
   } catch (const perinox::EvaluationError& e) {
-    return refuse("error in " + scenePath + ": " + e.what());
+    return refuse("error in " + cmd.scenePath + ": " + e.what());
   } catch (const std::invalid_argument& e) {
-    return refuse("error in " + scenePath + ": " + e.what());
+    return refuse("error in " + cmd.scenePath + ": " + e.what());
   } catch (const std::exception& e) {
     std::cerr << "perinox: internal error" << (comm->getSize() > 1 ? " on rank " + std::to_string(comm->getRank()) : std::string())
               << ": " << oneLine(e.what()) << "\n";
     if (comm->getSize() > 1) MPI_Abort(MPI_COMM_WORLD, 1);
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (const int early = beforeMpi(argc, argv); early >= 0) return early;
+  Tpetra::ScopeGuard mpi(&argc, &argv);
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  const bool root = comm->getRank() == 0;
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  auto refuse = [&](const std::string& msg) {
+    if (root) std::cerr << "perinox: " << oneLine(msg) << "\n";
+    return 2;
+  };
+  const std::string usageLine = "usage: perinox run SCENE.xml [options] (perinox --help lists them)";
+  if (args.empty()) return refuse("no command given; " + usageLine);
+  if (args[0] == "schema") {
+    if (root) perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
+    return 0;
+  }
+  if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; " + usageLine);
+
+  // Set up: the command line, then the scene (validated completely before any work).
+  RunCommand cmd;
+  if (const std::string bad = parseRun(args, cmd); !bad.empty()) return refuse(bad);
+  perinox::Scene scene;
+  try {
+    scene = perinox::loadScene(cmd.scenePath, cmd.overrides, xmlDirectory() + "/solvers");
+  } catch (const std::exception& e) {
+    return refuse(std::string("error: ") + e.what());
+  }
+  // Run and write.
+  return runAndWrite(scene, cmd, comm, refuse);
 }

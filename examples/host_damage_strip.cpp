@@ -1,5 +1,5 @@
-// host_damage_strip: a host application with its own NOX + Stratimikos set-up inside perinox's load
-// stepper with damage, writing its own output. No scene file.
+// host_damage_strip: a host application with its own NOX solve inside perinox's load stepper with
+// damage, writing its own output. No scene file.
 //
 // Sample run:  mpiexec -np 2 host_damage_strip --output DIR    (DIR/summary.json: the reaction per step;
 //              DIR/fields.pvtu: displacement, stress and damage for ParaView)
@@ -7,18 +7,15 @@
 // Description: tests/scenes/damage_detach_strip.xml built in C++: a 9 x 3 strip (spacing 1 mm) with two
 // square holes at its middle, pulled apart through fictitious layers to +-0.3 mm in 10 load steps;
 // Hencky plane strain, Silling's stabilisation G = 0.1 (its micromodulus computed by perinox), damage
-// (s_min 0.01, s_cr 0.02, continuous softening, stall breaks). The answer equals
+// (s_min 0.01, s_cr 0.02, continuous softening, stall breaks), MUMPS. The answer equals
 // `perinox run tests/scenes/damage_detach_strip.xml`.
 #include <NOX_Solver_Factory.H>
-#include <NOX_Solver_Generic.H>
-#include <NOX_Thyra_Vector.H>
 #include <Teuchos_DefaultComm.hpp>
-#include <Thyra_VectorStdOps.hpp>
 #include <Tpetra_Core.hpp>
 #include <iostream>
 
 #include <perinox/io/HostOutput.hpp>
-#include <perinox/solver/LinearSolver.hpp>
+#include <perinox/solver/EvaluatorSetup.hpp>
 #include <perinox/solver/NoxExtensions.hpp>
 #include <perinox/stepping/LoadStepper.hpp>
 #include <perinox/stepping/PeridynamicDamage.hpp>
@@ -48,31 +45,17 @@ std::shared_ptr<ProblemSpec> strip() {
   return P;
 }
 
-/// 2. The host's own Newton solve: NOX's line-search solver with perinox's counting group and its
-/// |R| / |reaction| <= 1e-10 test (NoxExtensions.hpp).
+/// 2. The host's own Newton solve: NOX's line-search solver (full step) on perinox's counting group
+/// with its |R| / |reaction| <= 1e-10 test, stopped after 4 iterations without halving (NoxExtensions.hpp).
 NewtonResult newtonSolve(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>& model,
                          const Teuchos::RCP<const ResidualScale>& scale, Thyra::VectorBase<double>& x) {
-  auto params = Teuchos::rcp(new Teuchos::ParameterList("NOX"));
-  params->sublist("Direction").sublist("Newton").sublist("Linear Solver").set("Tolerance", 1e-12);
-  params->sublist("Direction").sublist("Newton").set("Rescue Bad Newton Solve", true);
-  params->sublist("Printing").set("Output Information", NOX::Utils::Error);
-  auto group = Teuchos::rcp(new CountingGroup(NOX::Thyra::Vector(x.clone_v()), model));
-  group->setTolerance(1e-12);  // a linear solve above this relative residual counts as unconverged
-  const auto tests = newtonStatusTests(scale, 1e-10, 25, 2.0, 4);
-  NewtonResult r;
-  try {
-    auto solver = NOX::Solver::buildSolver(group, tests.combo, params);  // line search, full step
-    r.converged = solver->solve() == NOX::StatusTest::Converged && tests.residual->getStatus() == NOX::StatusTest::Converged;
-    Thyra::copy(dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX()).getThyraVector(), Teuchos::ptrFromRef(x));
-    r.iterations = solver->getNumIterations();
-  } catch (const std::exception& e) {
-    r.failure = e.what();  // an inverted particle, a singular tangent: the stepper cuts back
-  }
-  r.residuals = tests.residual->history();
-  r.work = std::max<long long>(r.iterations, static_cast<long long>(r.residuals.size()) - 1);
-  r.linear = group->counts();
-  if (!r.converged && r.failure.empty()) r.failure = "no convergence " + tests.residual->stagnation();
-  return r;
+  NewtonOptions options;
+  options.floorFactor = 2.0;
+  options.stagnationStop = 4;
+  const auto tests = newtonStatusTests(scale, options.tolerance, options.maxIterations, options.floorFactor, options.stagnationStop);
+  const auto group = countingGroup(model, x, options.linearTolerance);
+  auto solver = NOX::Solver::buildSolver(group, tests.combo, newtonParameters(options));
+  return solveNox(*solver, tests, group.get(), x, options.maxIterations);
 }
 
 /// 3. Records the reaction on the right grip after every accepted step.
@@ -85,19 +68,14 @@ struct ReactionProbe : StepObserver {
 };
 
 int run(const std::string& outDir, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
-  auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, strip()));
-  auto linear = Teuchos::rcp(new Teuchos::ParameterList("Linear Solver"));  // MUMPS: any rank count
-  linear->set("Linear Solver Type", "MUMPS");
-  linear->set("Preconditioner Type", "None");
-  evaluator->set_W_factory(buildLinearSolverFactory(linear, comm->getSize()));
+  auto evaluator = evaluatorWithSolver(comm, strip(), PERINOX_PRESETS "/mumps.xml");  // MUMPS: any rank count
 
   // 4. The stepper drives the model through its load factor p(0); perinox's damage is its policy.
   auto model = Teuchos::rcp(new LoadFactorModel(evaluator));
   model->onLoadFactor([ev = evaluator.get()](double lambda) { ev->setLoadFactor(lambda); });
   const auto scale = Teuchos::rcp(new EvaluatorResidualScale(evaluator));
   LoadStepperOptions options;
-  options.loadSteps = 10;
-  options.predictor = false;  // as the scene: each step starts from the last converged state
+  options.predictor = false;  // as the scene: each step starts from the last converged state (10 steps)
   LoadStepper stepper(model, [&](Thyra::VectorBase<double>& x) { return newtonSolve(model, scale, x); }, options);
   PeridynamicDamageOptions damageOptions;
   damageOptions.breakOnStalls = true;

@@ -13,14 +13,13 @@
 #include <Piro_LOCASolver.hpp>
 #include <Piro_NOXSolver.hpp>
 #include <Teuchos_DefaultComm.hpp>
-#include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Thyra_VectorStdOps.hpp>
 #include <Tpetra_Core.hpp>
 #include <iostream>
 
 #include <perinox/io/HostOutput.hpp>
-#include <perinox/solver/LinearSolver.hpp>
-#include <perinox/solver/LinearSolverValidation.hpp>
+#include <perinox/solver/EvaluatorSetup.hpp>
+#include <perinox/solver/NoxExtensions.hpp>
 
 using namespace perinox;
 
@@ -71,29 +70,18 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
   prescribe(*problem, selectBox(d, Vec3(-1.0, 0.0, 0.0), Vec3(0.0, 0.03, 0.0), Population::Fictitious), 1);
   prescribe(*problem, right, 0, [](const Vec3& X) { return 0.1 * X[0]; });
 
-  // 2. The model evaluator (it validates the problem) with a linear solver from perinox's Stratimikos factory.
-  auto evaluator = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
-  auto linear = Teuchos::getParametersFromXmlFile(solverFile);
-  validateLinearSolverList(*linear, solverFile);  // one sentence for a misspelt key, before any work
-  evaluator->set_W_factory(buildLinearSolverFactory(linear, comm->getSize()));
+  // 2. The model evaluator (it validates the problem) with the linear solver of the preset file
+  //    (checked first: one sentence for a misspelt key, before any work).
+  auto evaluator = evaluatorWithSolver(comm, problem, solverFile);
 
   // 3. Piro's NOX solver: full Newton until |F| < 1e-12 |F(x0)| or |F| at twice its round-off scale
-  //    (NOX's default |F| < 1e-8 means nothing for forces of 1e7 N).
-  auto piro = Teuchos::getParametersFromXmlString(R"(<ParameterList name="Piro">
-    <Parameter name="Exit on Failed NOX Solve" type="bool" value="true"/>
-    <ParameterList name="NOX"><Parameter name="Nonlinear Solver" type="string" value="Line Search Based"/>
-      <ParameterList name="Line Search"><Parameter name="Method" type="string" value="Full Step"/></ParameterList>
-      <ParameterList name="Printing"><Parameter name="Output Information" type="int" value="0"/></ParameterList>
-      <ParameterList name="Status Tests"><Parameter name="Test Type" type="string" value="Combo"/>
-        <Parameter name="Combo Type" type="string" value="OR"/><Parameter name="Number of Tests" type="int" value="4"/>
-        <ParameterList name="Test 0"><Parameter name="Test Type" type="string" value="RelativeNormF"/>
-          <Parameter name="Tolerance" type="double" value="1e-12"/></ParameterList>
-        <ParameterList name="Test 1"><Parameter name="Test Type" type="string" value="NormF"/></ParameterList>
-        <ParameterList name="Test 2"><Parameter name="Test Type" type="string" value="MaxIters"/>
-          <Parameter name="Maximum Iterations" type="int" value="30"/></ParameterList>
-        <ParameterList name="Test 3"><Parameter name="Test Type" type="string" value="FiniteValue"/></ParameterList>
-      </ParameterList></ParameterList></ParameterList>)");
-  piro->sublist("NOX").sublist("Status Tests").sublist("Test 1").set("Tolerance", 2 * evaluator->roundoffScale());
+  //    (NOX's default |F| < 1e-8 means nothing for forces of 1e7 N), at most 30 iterations.
+  NewtonOptions newton;
+  newton.maxIterations = 30;
+  newton.floorFactor = 2.0;
+  auto piro = Teuchos::rcp(new Teuchos::ParameterList("Piro"));
+  piro->set("Exit on Failed NOX Solve", true);
+  piro->sublist("NOX").setParameters(*newtonParametersWithStatusTests(newton, 1e-12, evaluator->roundoffScale()));
   if (loca) return continuation(*piro, evaluator, end, right, outputFile);
   evaluator->setLoadFactor(1.0);  // the parameter p(0): Piro passes on its nominal value, this one
   Piro::NOXSolver<double> solver(piro, evaluator);

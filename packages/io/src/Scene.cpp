@@ -3,6 +3,8 @@
 #include "perinox/io/Scene.hpp"
 
 #include <Teuchos_Array.hpp>
+#include <Teuchos_StandardParameterEntryValidators.hpp>
+#include <Teuchos_StrUtils.hpp>
 #include <Teuchos_StringInputSource.hpp>
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
@@ -16,8 +18,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
@@ -70,7 +74,10 @@ std::string number(double v) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Schema
+// Schema: every key with its default, its meaning and, where the value is restricted, a Teuchos
+// validator holding the allowed values (StringToIntegralParameterEntryValidator) or the range
+// (an EnhancedNumberValidator): written once, they give the documentation, the checks and the
+// messages.
 // ---------------------------------------------------------------------------------------------
 
 /// Sublists whose children are user-named entries validated against one template.
@@ -83,41 +90,132 @@ const std::map<std::string, std::string>& namedSublists() {
   return m;
 }
 
-// Keys are known to the checks by pattern: the key with the user's name of a named sublist's
-// entry replaced by '*' ("Regions/*/Side"). The schema's setters below record, for the keys
-// that need it, the allowed values and the array length, from the same lists that write the
-// keys' documentation.
-std::map<std::string, std::vector<std::string>>& choiceTable() {
-  static std::map<std::string, std::vector<std::string>> t;
-  return t;
+/// The allowed values of an enumerated key, matched exactly, each with the value E the scene's
+/// builder reads (getIntegralValue). Its documentation is the key's own: it lists the values.
+template <class E>
+class Choices final : public Teuchos::StringToIntegralParameterEntryValidator<E> {
+ public:
+  using Teuchos::StringToIntegralParameterEntryValidator<E>::StringToIntegralParameterEntryValidator;
+  void printDoc(const std::string& doc, std::ostream& out) const override { Teuchos::StrUtils::printLines(out, "# ", doc); }
+};
+
+/// The allowed values of each entry of an array of strings (Fictitious Sides); documented by the key.
+class ChoiceList final : public Teuchos::ArrayStringValidator {
+ public:
+  using Teuchos::ArrayStringValidator::ArrayStringValidator;
+  void printDoc(const std::string& doc, std::ostream& out) const override { Teuchos::StrUtils::printLines(out, "# ", doc); }
+};
+
+/// A number's allowed range, each end closed, open or absent; its phrase ("from 1 to 60", "in (0,
+/// 1]", "positive", ">= 0") ends the key's documentation and the message refusing a value outside
+/// it, with an optional note on why.
+enum class End { Closed, Open, None };
+template <class T>
+class Range final : public Teuchos::EnhancedNumberValidator<T> {
+ public:
+  Range(End loEnd, T lo, T hi, End hiEnd, std::string note = "")
+      : Teuchos::EnhancedNumberValidator<T>(loEnd == End::None ? std::numeric_limits<T>::lowest() : lo,
+                                            hiEnd == End::None ? std::numeric_limits<T>::max() : hi),
+        loEnd_(loEnd), hiEnd_(hiEnd), lo_(lo), hi_(hi), note_(std::move(note)) {}
+  bool holds(T v) const {
+    if (loEnd_ != End::None && (v < lo_ || (loEnd_ == End::Open && v == lo_))) return false;
+    return hiEnd_ == End::None || (v < hi_ || (hiEnd_ == End::Closed && v == hi_));
+  }
+  std::string phrase() const {
+    if (std::is_integral<T>::value)
+      return hiEnd_ == End::None ? "at least " + shown(lo_) : "from " + shown(lo_) + " to " + shown(hi_);
+    if (hiEnd_ == End::None) {
+      if (lo_ == 0) return loEnd_ == End::Open ? "positive" : ">= 0";
+      return (loEnd_ == End::Open ? "greater than " : "at least ") + shown(lo_);
+    }
+    return std::string("in ") + (loEnd_ == End::Open ? "(" : "[") + shown(lo_) + ", " + shown(hi_) + (hiEnd_ == End::Open ? ")" : "]");
+  }
+  const std::string& note() const { return note_; }
+  void validate(const Teuchos::ParameterEntry& entry, const std::string& name, const std::string& sublist) const override {
+    Teuchos::EnhancedNumberValidator<T>::validate(entry, name, sublist);
+    if (!holds(Teuchos::getValue<T>(entry)))
+      throw Teuchos::Exceptions::InvalidParameterValue("'" + sublist + "/" + name + "' must be " + phrase());
+  }
+  void printDoc(const std::string& doc, std::ostream& out) const override { Teuchos::StrUtils::printLines(out, "# ", doc); }
+
+ private:
+  static std::string shown(T v) { return number(static_cast<double>(v)); }
+  End loEnd_, hiEnd_;
+  T lo_, hi_;
+  std::string note_;
+};
+
+Teuchos::RCP<const Range<int>> ints(int lo, int hi = INT_MAX) {
+  return Teuchos::rcp(new Range<int>(End::Closed, lo, hi, hi == INT_MAX ? End::None : End::Closed));
+}
+Teuchos::RCP<const Range<double>> reals(End loEnd, double lo, double hi, End hiEnd, const std::string& note = "") {
+  return Teuchos::rcp(new Range<double>(loEnd, lo, hi, hiEnd, note));
+}
+Teuchos::RCP<const Range<double>> positive(const std::string& note = "") { return reals(End::Open, 0, 0, End::None, note); }
+Teuchos::RCP<const Range<double>> nonNegative(const std::string& note = "") { return reals(End::Closed, 0, 0, End::None, note); }
+
+/// A number key with its range: the range's phrase ends the documentation. The validator is
+/// attached without checking the default (a default such as Young's Modulus 0 means "not given").
+template <class T>
+void setNumber(ParameterList& l, const std::string& key, T def, const std::string& doc, const Teuchos::RCP<const Range<T>>& range) {
+  l.set(key, def, doc + " (" + range->phrase() + (range->note().empty() ? "" : "; " + range->note()) + ")");
+  l.getEntryRCP(key)->setValidator(range);
 }
 
+template <class E>
+struct Choice {
+  std::string value;
+  E e;
+  std::string meaning;
+};
+
+/// An enumerated string key: matched exactly; its documentation lists the values.
+template <class E>
+void setChoice(ParameterList& l, const std::string& key, const std::string& def, const std::vector<Choice<E>>& choices,
+               const std::string& lead = "", const std::string& tail = "") {
+  std::vector<std::string> values, described, docs;
+  std::vector<E> es;
+  for (const auto& c : choices) {
+    values.push_back(c.value);
+    docs.push_back(c.meaning);
+    es.push_back(c.e);
+    described.push_back(c.meaning.empty() ? c.value : c.value + " (" + c.meaning + ")");
+  }
+  l.set(key, def, lead + orList(described) + tail,
+        Teuchos::rcp(new Choices<E>(Teuchos::arrayViewFromVector(values), Teuchos::arrayViewFromVector(docs),
+                                    Teuchos::arrayViewFromVector(es), key)));
+}
+
+/// A choice whose builder reads the string itself (its position in the list is its value).
+void setChoice(ParameterList& l, const std::string& key, const std::string& def,
+               const std::vector<std::pair<std::string, std::string>>& choices, const std::string& lead = "",
+               const std::string& tail = "") {
+  std::vector<Choice<int>> c;
+  for (const auto& [value, meaning] : choices) c.push_back({value, static_cast<int>(c.size()), meaning});
+  setChoice(l, key, def, c, lead, tail);
+}
+
+/// The value E of the enumerated key `key` of the user's list l, through the schema's validator.
+template <class E>
+E choice(const ParameterList& l, const ParameterList& schema, const std::string& key) {
+  const auto v = Teuchos::rcp_dynamic_cast<const Teuchos::StringToIntegralParameterEntryValidator<E>>(
+      schema.getEntry(key).validator(), true);
+  return v->getIntegralValue(l.get<std::string>(key), key, l.name());
+}
+
+std::vector<Choice<Side>> sideChoices() {
+  std::vector<Choice<Side>> c;
+  for (int s = 0; s < 6; ++s) c.push_back({sideName(static_cast<Side>(s)), static_cast<Side>(s), ""});
+  return c;
+}
+
+// Vector keys are known to the checks by pattern: the key with the user's name of a named
+// sublist's entry replaced by '*' ("Regions/*/Point"). The setter records, for each, the array
+// length the scene's dimension fixes.
 enum class Length { Dim, DimOrEmpty, DimSquaredOrEmpty, Three };
 std::map<std::string, Length>& lengthTable() {
   static std::map<std::string, Length> t;
   return t;
-}
-
-struct Choice {
-  std::string value, meaning;
-};
-
-/// An enumerated string key: matched exactly; its documentation lists the values.
-void setChoice(ParameterList& l, const std::string& pattern, const std::string& key, const std::string& def,
-               const std::vector<Choice>& choices, const std::string& lead = "", const std::string& tail = "") {
-  std::vector<std::string> values, described;
-  for (const auto& c : choices) {
-    values.push_back(c.value);
-    described.push_back(c.meaning.empty() ? c.value : c.value + " (" + c.meaning + ")");
-  }
-  choiceTable()[joinKey(pattern, key)] = values;
-  l.set(key, def, lead + orList(described) + tail);
-}
-
-std::vector<Choice> sideChoices() {
-  std::vector<Choice> c;
-  for (int s = 0; s < 6; ++s) c.push_back({sideName(static_cast<Side>(s)), ""});
-  return c;
 }
 
 std::string lengthRule(Length r) {
@@ -140,9 +238,9 @@ void setVector(ParameterList& l, const std::string& pattern, const std::string& 
 ParameterList holeTemplate() {
   const std::string p = "Discretization/Holes/*";
   ParameterList h("hole");
-  setChoice(h, p, "Shape", "Circle", {{"Circle", "disc; cylinder along z in 3D"}, {"Rectangle", ""}});
+  setChoice<Hole::Kind>(h, "Shape", "Circle", {{"Circle", Hole::Kind::Circle, "disc; cylinder along z in 3D"}, {"Rectangle", Hole::Kind::Rectangle, ""}});
   setVector(h, p, "Center", arr<double>({0, 0, 0}), "centre of the hole", Length::Dim);
-  h.set("Radius", 0.0, "radius of a Circle (> 0)");
+  setNumber(h, "Radius", 0.0, "radius of a Circle", positive());
   setVector(h, p, "Half Widths", arr<double>({0, 0, 0}), "half extents of a Rectangle per axis (each > 0)", Length::Dim);
   return h;
 }
@@ -150,7 +248,7 @@ ParameterList holeTemplate() {
 ParameterList regionTemplate() {
   const std::string p = "Regions/*";
   ParameterList r("region");
-  setChoice(r, p, "Type", "Box",
+  setChoice(r, "Type", "Box",
             {{"Box", ""}, {"Side Layer", ""}, {"Fictitious Side", ""}, {"Nearest", ""},
              {"All Fictitious", "needs 'Discretization/Fictitious Sides'"}, {"All Real", ""},
              {"Node Set", "Exodus mesh: the particles of the elements touching the set's nodes (Peridigm's rule)"},
@@ -158,9 +256,11 @@ ParameterList regionTemplate() {
              {"Block", "the particles of a block (particle file: 5th column; Exodus: element block)"}});
   setVector(r, p, "Lower", arr<double>({0, 0, 0}), "Box: lower corner", Length::Dim);
   setVector(r, p, "Upper", arr<double>({0, 0, 0}), "Box: upper corner", Length::Dim);
-  setChoice(r, p, "Population", "Real", {{"Real", ""}, {"Fictitious", ""}, {"All", "every particle"}}, "Box/Nearest: ");
-  setChoice(r, p, "Side", "xmin", sideChoices(), "Side Layer / Fictitious Side: ", " (a side of the body's dimension)");
-  r.set("Thickness", 0.0, "Side Layer: layer thickness (>= 0; 0 = one particle spacing)");
+  setChoice<Population>(r, "Population", "Real",
+                        {{"Real", Population::Real, ""}, {"Fictitious", Population::Fictitious, ""}, {"All", Population::All, "every particle"}},
+                        "Box/Nearest: ");
+  setChoice(r, "Side", "xmin", sideChoices(), "Side Layer / Fictitious Side: ", " (a side of the body's dimension)");
+  setNumber(r, "Thickness", 0.0, "Side Layer: layer thickness", nonNegative("0: one particle spacing"));
   setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point", Length::Dim);
   r.set("Name", "", "Node Set / Side Set / Block: the set's or Exodus block's name in the mesh (give Name or Id)");
   r.set("Id", -1, "Node Set / Side Set / Block: the set's or block's id (>= 0; -1: none, give Name)");
@@ -177,8 +277,8 @@ ParameterList onRegion(const std::string& what, const std::string& regionDoc) {
 ParameterList conditionTemplate() {
   const std::string p = "Boundary Conditions/*";
   ParameterList c = onRegion("condition", "name of the region whose particles are constrained");
-  setChoice(c, p, "Component", "all", {{"x", ""}, {"y", ""}, {"z", ""}, {"all", ""}}, "",
-            "; a component of a particle prescribed by two conditions must get the same value from both");
+  setChoice<int>(c, "Component", "all", {{"x", 0, ""}, {"y", 1, ""}, {"z", 2, ""}, {"all", -1, ""}}, "",
+                 "; a component of a particle prescribed by two conditions must get the same value from both");
   c.set("Value", 0.0, "prescribed displacement at load factor 1");
   setVector(c, p, "Gradient", arr<double>({}), "optional: u = Value + Gradient . X", Length::DimOrEmpty);
   return c;
@@ -187,7 +287,7 @@ ParameterList conditionTemplate() {
 ParameterList loadTemplate() {
   const std::string p = "Loads/*";
   ParameterList l = onRegion("load", "name of the region carrying the load");
-  setChoice(l, p, "Type", "Total Force",
+  setChoice(l, "Type", "Total Force",
             {{"Total Force", "spread over the region by volume"}, {"Traction", "force per area on a Side Layer"},
              {"Body Force", "force per volume"}});
   setVector(l, p, "Value", arr<double>({0, 0, 0}), "the load vector at load factor 1", Length::Dim);
@@ -195,9 +295,8 @@ ParameterList loadTemplate() {
 }
 
 ParameterList probeTemplate() {
-  const std::string p = "Probes/*";
   ParameterList r = onRegion("probe", "region to probe");
-  setChoice(r, p, "Quantity", "Displacement",
+  setChoice(r, "Quantity", "Displacement",
             {{"Displacement", "mean over the region, per step"}, {"Reaction", "sum of reaction forces, per step"},
              {"Profile", "every particle of the region at the end, to profile_<name>.csv"}});
   return r;
@@ -212,157 +311,182 @@ const ParameterList& templateFor(const std::string& sub) {
   return t.at(sub);
 }
 
-Teuchos::RCP<ParameterList> buildSchema() {
-  templateFor("Regions");  // the templates record their keys' choices and lengths first
-  const std::string lim = std::to_string(kMaxParticles);
-  auto s = Teuchos::rcp(new ParameterList("perinox"));
-  s->set("Title", "", "one line naming the scene");
-  s->set("Description", "", "free text");
-  s->set("Expected Outcome", "", "for test scenes: 'converged', or 'failure: TEXT' where TEXT must appear in the failure reason");
-  auto& d = s->sublist("Discretization", false, "particles and families");
+void discretizationSchema(ParameterList& d) {
   const std::string dp = "Discretization";
-  setChoice(d, dp, "Type", "Lattice", {{"Lattice", ""}, {"Particle File", ""},
+  setChoice(d, "Type", "Lattice", {{"Lattice", ""}, {"Particle File", ""},
             {"Exodus", "an Exodus II mesh: a particle per element at its centroid with its volume (docs/exodus.md)"}});
   d.set("Dimension", 2, "1, 2 or 3; every vector key (corners, points, centres, load values) then takes exactly this many entries (an absent key's 3-entry default counts only its first Dimension entries)");
   setVector(d, dp, "Lower Corner", arr<double>({0, 0, 0}), "Lattice: lower corner of the body", Length::Dim);
   setVector(d, dp, "Upper Corner", arr<double>({1, 1, 1}), "Lattice: upper corner of the body", Length::Dim);
   setVector(d, dp, "Particles", arr<int>({}),
-            "Lattice: particles per axis, each >= 1, at most " + lim + " lattice sites in all with the fictitious layers; or give Spacing",
+            "Lattice: particles per axis, each >= 1, at most " + std::to_string(kMaxParticles) + " lattice sites in all with the fictitious layers; or give Spacing",
             Length::DimOrEmpty);
   d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing; Exodus: nominal spacing (0: the median element's edge, volume^(1/3), 2D (area)^(1/2))");
   d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (1 <= factor <= " + number(kMaxHorizonFactor) + ")");
   d.set("Horizon", 0.0, "Particle File, Exodus: absolute horizon (overrides Horizon Factor when > 0; spacing <= horizon <= " + number(kMaxHorizonFactor) + " x spacing)");
-  d.set("Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A");
+  setNumber(d, "Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A", positive());
   std::vector<std::string> sides;
   for (const auto& c : sideChoices()) sides.push_back(c.value);
-  choiceTable()["Discretization/Fictitious Sides"] = sides;
-  d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides));
+  d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides),
+        Teuchos::rcp(new ChoiceList(Teuchos::rcp(new Teuchos::StringValidator(Teuchos::Array<std::string>(sides))))));
   d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
   d.set("Mesh File", "", "Exodus: path (relative to the scene) of the Exodus II mesh (hex, tet, wedge, sphere in 3D; quad, tri, sphere in 2D, areas x Thickness)");
-  d.set("Jitter", 0.0, "random shift of real particles, fraction of the spacing, in [0, 1)");
-  d.set("Jitter Seed", 12345, "seed of the jitter (>= 0)");
+  setNumber(d, "Jitter", 0.0, "random shift of real particles, fraction of the spacing", reals(End::Closed, 0, 1, End::Open));
+  setNumber(d, "Jitter Seed", 12345, "seed of the jitter", ints(0));
   d.sublist("Holes", false, "named holes (Shape, Center, Radius / Half Widths)");
-  setChoice(d, dp, "Partition", partitionName(PartitionMethod::Rcb),
-            {{partitionName(PartitionMethod::Rcb), "Zoltan2 recursive coordinate bisection of the reference positions"},
-             {partitionName(PartitionMethod::MultiJagged), "Zoltan2 multi-jagged"},
-             {partitionName(PartitionMethod::Slabs), "contiguous particle-id ranges, lattice rows; for tests"}},
-            "how particles are split among MPI ranks: ");
-  auto& m = s->sublist("Material", false, "elastic material");
-  const std::string mp = "Material";
-  setChoice(m, mp, "Model", "Hencky", {{"Hencky", "finite deformation"}, {"Small Strain", ""}});
-  setChoice(m, mp, "Plane", "Plane Strain", {{"Plane Strain", ""}, {"Plane Stress", ""}}, "2D: ");
-  m.set("Young's Modulus", 0.0, "E > 0, in the scene's stress units");
-  m.set("Poisson's Ratio", 0.0, "-1 < nu < 0.5");
-  setChoice(m, mp, "Modulus Field", "Uniform",
+  setChoice<PartitionMethod>(d, "Partition", partitionName(PartitionMethod::Rcb),
+                             {{partitionName(PartitionMethod::Rcb), PartitionMethod::Rcb, "Zoltan2 recursive coordinate bisection of the reference positions"},
+                              {partitionName(PartitionMethod::MultiJagged), PartitionMethod::MultiJagged, "Zoltan2 multi-jagged"},
+                              {partitionName(PartitionMethod::Slabs), PartitionMethod::Slabs, "contiguous particle-id ranges, lattice rows; for tests"}},
+                             "how particles are split among MPI ranks: ");
+}
+
+void materialSchema(ParameterList& m) {
+  setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}});
+  setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, "2D: ");
+  setNumber(m, "Young's Modulus", 0.0, "E, in the scene's stress units", positive());
+  setNumber(m, "Poisson's Ratio", 0.0, "nu", reals(End::Open, -1, 0.5, End::Open, "nu = 0.5 is incompressible: the Lame constant lambda is infinite"));
+  setChoice(m, "Modulus Field", "Uniform",
             {{"Uniform", ""}, {"Seed001 Bar", "E(x) of seed 001 eq. 18: E on the left half, softer to the right"}});
-  m.set("Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20");
-  m.set("Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)");
-  m.set("Field Length", 1.0, "Seed001 Bar: L_tot (x measured from 0)");
-  auto& mo = s->sublist("Model", false, "effects");
-  const std::string mop = "Model";
-  setChoice(mo, mop, "Stabilization", "None", {{"None", ""}, {"Silling", ""}});
-  mo.set("G", 0.0, "Silling stabilisation parameter (dimensionless, >= 0)");
-  setChoice(mo, mop, "Zero-Energy Control", "None",
+  setNumber(m, "Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20", positive());
+  setNumber(m, "Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)", positive());
+  setNumber(m, "Field Length", 1.0, "Seed001 Bar: L_tot (x measured from 0)", positive());
+}
+
+void modelSchema(ParameterList& mo) {
+  setChoice(mo, "Stabilization", "None", {{"None", ""}, {"Silling", ""}});
+  setNumber(mo, "G", 0.0, "Silling stabilisation parameter (dimensionless)", nonNegative());
+  setChoice(mo, "Zero-Energy Control", "None",
             {{"None", ""}, {"Springs", "C1"}, {"Average Displacement", "C2"}, {"Stress Points", "seed 001; nearest-neighbour families"}});
-  mo.set("Stress Point Seed", 2018, "seed of the stress-point arrangements (>= 0; drawn per particle from its global id)");
+  setNumber(mo, "Stress Point Seed", 2018, "seed of the stress-point arrangements (drawn per particle from its global id)", ints(0));
   mo.set("Control Constant", -1.0, "C1 or C2; negative: seed 001 Table 1 value for the particle count (n = 100, 200, 500, 1000)");
-  auto& dm = s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps");
-  const std::string dmp = "Damage";
+}
+
+void damageSchema(ParameterList& dm) {
   dm.set("Enabled", false, "turn the damage effect on");
   dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
   dm.set("Softening Start", 0.0015, "s_min: bond forces soften from here (0 < s_min < s_cr)");
-  dm.set("Beta", 3.0, "steepness of the tanh softening (> 0)");
-  setChoice(dm, dmp, "Softening", "Paper",
-            {{"Paper", "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
-             {"Continuous", "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}});
-  dm.set("Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step");
-  setChoice(dm, dmp, "On Stall", "Stop",
+  setNumber(dm, "Beta", 3.0, "steepness of the tanh softening", positive());
+  setChoice<DamageSpec::Softening>(dm, "Softening", "Paper",
+            {{"Paper", DamageSpec::Softening::Paper, "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
+             {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}});
+  setNumber(dm, "Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step", ints(1));
+  setChoice(dm, "On Stall", "Stop",
             {{"Stop", "the paper's Fig. 8; the run stops with a diagnosis"},
              {"Break Most Stretched",
               "break, at the last converged state, the intact bonds whose stretch is within 'Stall Break Tolerance' "
               "of the largest, if that one is in the softening band, re-equilibrate at the same load and go on: the remedy for a "
               "snap-back of softening bonds under displacement control; reported per step as stall_broken_bonds"}},
             "what a load step that fails after all its cut-backs does: ");
-  dm.set("Stall Break Tolerance", 1e-6, "On Stall = Break Most Stretched: bonds within this fraction of (s_cr - s_min) of the largest stretch break together (mirror-image bonds differ by round-off only)");
-  dm.set("Max Stall Breaks", 200, "On Stall = Break Most Stretched: stall breaks allowed in a run");
-  dm.set("Reload Tolerance", 0.01,
-         "when a damaged body cannot carry the load it broke at (a snap-back), the highest load it carries is found by reloading "
-         "it, to this fraction of that load (0 < tolerance < 0.5); the load stepping resumes from there");
-  s->sublist("Regions", false, "named particle sets");
-  s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
-  s->sublist("Loads", false, "named loads");
-  auto& rot = s->sublist("Superposed Rotation", false,
-                         "a rigid rotation superposed on the loading: at load factor lambda the body turns by lambda * Angle; "
-                         "prescribed particles follow the arc, dead loads turn with the body (objectivity tests)");
+  setNumber(dm, "Stall Break Tolerance", 1e-6, "On Stall = Break Most Stretched: bonds within this fraction of (s_cr - s_min) of the largest stretch break together (mirror-image bonds differ by round-off only)",
+            reals(End::Closed, 0, 1, End::Open));
+  setNumber(dm, "Max Stall Breaks", 200, "On Stall = Break Most Stretched: stall breaks allowed in a run", ints(1));
+  setNumber(dm, "Reload Tolerance", 0.01,
+            "when a damaged body cannot carry the load it broke at (a snap-back), the highest load it carries is found by reloading "
+            "it, to this fraction of that load; the load stepping resumes from there",
+            reals(End::Open, 0, 0.5, End::Open));
+}
+
+void rotationSchema(ParameterList& rot) {
   const std::string rp = "Superposed Rotation";
   rot.set("Angle", 0.0, "degrees at load factor 1 (0: no rotation)");
   setVector(rot, rp, "Center", arr<double>({0, 0, 0}), "a point on the axis", Length::Dim);
   setVector(rot, rp, "Axis", arr<double>({0, 0, 1}), "3D: the axis (normalised); 2D: must be z", Length::Three);
-  s->sublist("Probes", false, "named probes written per load step");
-  auto& r = s->sublist("Reference", false, "analytic reference for errors");
+}
+
+void referenceSchema(ParameterList& r) {
   const std::string refp = "Reference";
-  setChoice(r, refp, "Type", "None",
+  setChoice(r, "Type", "None",
             {{"None", ""}, {"Hydrostatic Hencky", ""}, {"Uniform Stretch", ""}, {"Affine", ""},
              {"Seed001 Bar", "eq. 19 with the Material's field parameters"}});
   setVector(r, refp, "Gradient", arr<double>({}), "Affine: displacement gradient H, row-major (u = H (X - Center))", Length::DimSquaredOrEmpty);
   r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
-  r.set("Stretch", 1.0, "Uniform Stretch: l / l0 (> 0)");
+  setNumber(r, "Stretch", 1.0, "Uniform Stretch: l / l0", positive());
   setVector(r, refp, "Center", arr<double>({0, 0, 0}), "fixed point of the stretch", Length::Dim);
-  auto& so = s->sublist("Solver", false, "nonlinear and linear solvers");
-  const std::string sp = "Solver";
-  setChoice(so, sp, "Method", "Newton", {{"Newton", "implicit, NOX"}, {"ADR", "explicit adaptive dynamic relaxation"}});
-  so.set("ADR Tolerance", 1e-6, "ADR: stop when both e1 and e2 (seed 001) are below this");
-  so.set("ADR Max Iterations", 2000000, "ADR: iterations allowed per load step");
-  so.set("ADR Mass Safety", 4.0, "ADR: fictitious mass = safety * 1/4 sum_j |K_ij| (>= 1 for stability)");
-  so.set("Load Steps", 10, "equal load increments to load factor 1 (1 to " + std::to_string(kMaxLoadSteps) + ")");
-  so.set("Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)");
-  so.set("Max Newton Iterations", 25, "per load step (1 to " + std::to_string(kMaxNewtonIterations) + ")");
-  setChoice(so, sp, "Line Search", "Full Step",
+}
+
+void arcLengthSchema(ParameterList& al) {
+  al.set("Initial Arc Length", 0.05, "arc length of the first step (Min Arc Length <= it <= Max Arc Length)");
+  al.set("Min Arc Length", 1e-4, "the run stops when a failing step would need a shorter arc (> 0)");
+  al.set("Max Arc Length", 0.5, "the arc grows by 1.5 after steps needing at most 'Solver/Easy Iterations' corrector iterations, up to this");
+  setNumber(al, "Max Steps", 100, "converged continuation steps allowed", ints(1, kMaxArcSteps));
+  setNumber(al, "Target Load Factor", 1.0, "stop once the load factor reaches this", positive());
+  setNumber(al, "Target Deflection", 0.0, "stop once the magnitude of the deflection reaches this (0: no deflection target)", nonNegative());
+  al.set("Deflection Probe", "", "name of a Displacement probe whose component 'Deflection Component' is the deflection (for the target and the path)");
+  setChoice<int>(al, "Deflection Component", "y", {{"x", 0, ""}, {"y", 1, ""}, {"z", 2, ""}});
+}
+
+void solverSchema(ParameterList& so) {
+  setChoice(so, "Method", "Newton", {{"Newton", "implicit, NOX"}, {"ADR", "explicit adaptive dynamic relaxation"}});
+  setNumber(so, "ADR Tolerance", 1e-6, "ADR: stop when both e1 and e2 (seed 001) are below this", reals(End::Open, 0, 1, End::Open));
+  setNumber(so, "ADR Max Iterations", 2000000, "ADR: iterations allowed per load step", ints(1));
+  setNumber(so, "ADR Mass Safety", 4.0, "ADR: fictitious mass = safety * 1/4 sum_j |K_ij|", reals(End::Closed, 1, 0, End::None, "the stability bound"));
+  setNumber(so, "Load Steps", 10, "equal load increments to load factor 1", ints(1, kMaxLoadSteps));
+  setNumber(so, "Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)", reals(End::Open, 0, 1, End::Open));
+  setNumber(so, "Max Newton Iterations", 25, "per load step", ints(1, kMaxNewtonIterations));
+  setChoice(so, "Line Search", "Full Step",
             {{"Full Step", ""}, {"Backtrack", ""}, {"Polynomial", "NOX line searches"},
              {"Trust Region", ""}, {"Inexact Trust Region", "NOX's dogleg trust-region solvers; need the assembled Jacobian"}},
             "globalisation: ");
   so.set("Adaptive Steps", false, "grow the load increment by 1.5 after steps needing at most 'Easy Iterations' Newton iterations (up to 'Max Increment'); cut-backs still halve it");
-  so.set("Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations (>= 0)");
-  so.set("Max Increment", 0.25, "adaptive stepping: largest load increment");
-  so.set("Max Cutbacks", 4, "halvings of a load step that fails before the run stops (0 to " + std::to_string(kMaxCutbacks) + ")");
+  setNumber(so, "Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations", ints(0));
+  setNumber(so, "Max Increment", 0.25, "adaptive stepping: largest load increment", reals(End::Open, 0, 1, End::Closed));
+  setNumber(so, "Max Cutbacks", 4, "halvings of a load step that fails before the run stops", ints(0, kMaxCutbacks));
   so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps; else Load Steps to " + std::to_string(kMaxTotalSteps) + ")");
-  so.set("Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one");
-  so.set("Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables");
+  setNumber(so, "Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one", reals(End::Open, 0, 1, End::Closed));
+  setNumber(so, "Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables", nonNegative());
   so.set("Stability Check", false, "after each converged step, count negative pivots of the tangent (serial LDL^T on rank 0) and stop with a diagnosis when the equilibrium is unstable");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
-  so.set("Verbosity", 0, "NOX output level (0 quiet, 1 iterations)");
-  so.set("Stagnation Stop", 0, "stop a Newton solve early (and cut back) when its normalised residual has not halved over this many iterations; 0: off (a failed solve is still diagnosed as stagnation over its last 5 iterations)");
-  setChoice(so, sp, "Continuation", "Load Stepping",
+  setNumber(so, "Verbosity", 0, "NOX output level (0 quiet, 1 iterations)", ints(0));
+  setNumber(so, "Stagnation Stop", 0, "stop a Newton solve early (and cut back) when its normalised residual has not halved over this many iterations; 0: off (a failed solve is still diagnosed as stagnation over its last 5 iterations)", ints(0));
+  setChoice(so, "Continuation", "Load Stepping",
             {{"Load Stepping", "load factor 0 to 1 in increments"},
              {"Arc Length", "pseudo-arc-length continuation through limit points; see the Arc Length sublist"}});
-  auto& al = so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2");
-  al.set("Initial Arc Length", 0.05, "arc length of the first step (Min Arc Length <= it <= Max Arc Length)");
-  al.set("Min Arc Length", 1e-4, "the run stops when a failing step would need a shorter arc (> 0)");
-  al.set("Max Arc Length", 0.5, "the arc grows by 1.5 after steps needing at most 'Solver/Easy Iterations' corrector iterations, up to this");
-  al.set("Max Steps", 100, "converged continuation steps allowed (1 to " + std::to_string(kMaxArcSteps) + ")");
-  al.set("Target Load Factor", 1.0, "stop once the load factor reaches this");
-  al.set("Target Deflection", 0.0, "stop once the magnitude of the deflection reaches this (0: no deflection target)");
-  al.set("Deflection Probe", "", "name of a Displacement probe whose component 'Deflection Component' is the deflection (for the target and the path)");
-  setChoice(al, "Solver/Arc Length", "Deflection Component", "y", {{"x", ""}, {"y", ""}, {"z", ""}});
+  arcLengthSchema(so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2"));
   so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
-  setChoice(so, sp, "Jacobian", "Preset",
+  setChoice(so, "Jacobian", "Preset",
             {{"Assembled", "sparse matrix"}, {"Matrix-Free", "analytic J v from the linearised kernels; nothing assembled"},
              {"Jacobian-Free", "J v by finite differences of the residual"},
              {"Preset", "as the linear solver preset says; Assembled if it says nothing"}});
-  setChoice(so, sp, "Preconditioner Matrix", "Preset",
+  setChoice(so, "Preconditioner Matrix", "Preset",
             {{"Assembled", "the full Jacobian"}, {"Neighbours", "only couplings within one horizon; memory proportional to the family size"},
              {"Preset", "as the preset says; Neighbours if it says nothing"}},
             "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: ");
-  so.set("Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)");
-  auto& o = s->sublist("Output", false, "what is written");
+  setNumber(so, "Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)",
+            reals(End::Open, 0, 1e-2, End::Open));
+}
+
+void outputSchema(ParameterList& o) {
   o.set("VTK", true, "write .vtu/.pvtu fields (when Format is VTU or Both)");
-  setChoice(o, "Output", "Format", "VTU", {{"VTU", "fields.pvtu and fields_<rank>.vtu of the last state"},
+  setChoice(o, "Format", "VTU", {{"VTU", "fields.pvtu and fields_<rank>.vtu of the last state"},
             {"Exodus", "fields.e: every converged load step as an Exodus II time step (docs/exodus.md)"}, {"Both", "VTU and Exodus"}});
   o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
+}
+
+Teuchos::RCP<ParameterList> buildSchema() {
+  templateFor("Regions");  // the templates record their keys' lengths first
+  auto s = Teuchos::rcp(new ParameterList("perinox"));
+  s->set("Title", "", "one line naming the scene");
+  s->set("Description", "", "free text");
+  s->set("Expected Outcome", "", "for test scenes: 'converged', or 'failure: TEXT' where TEXT must appear in the failure reason");
+  discretizationSchema(s->sublist("Discretization", false, "particles and families"));
+  materialSchema(s->sublist("Material", false, "elastic material"));
+  modelSchema(s->sublist("Model", false, "effects"));
+  damageSchema(s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps"));
+  s->sublist("Regions", false, "named particle sets");
+  s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
+  s->sublist("Loads", false, "named loads");
+  rotationSchema(s->sublist("Superposed Rotation", false,
+                            "a rigid rotation superposed on the loading: at load factor lambda the body turns by lambda * Angle; "
+                            "prescribed particles follow the arc, dead loads turn with the body (objectivity tests)"));
+  s->sublist("Probes", false, "named probes written per load step");
+  referenceSchema(s->sublist("Reference", false, "analytic reference for errors"));
+  solverSchema(s->sublist("Solver", false, "nonlinear and linear solvers"));
+  outputSchema(s->sublist("Output", false, "what is written"));
   // For 'perinox schema': the keys of one entry of each named sublist (nothing reads them).
   for (const auto& [sub, what] : namedSublists()) {
-    ParameterList& parent = sub == "Holes" ? d.sublist("Holes") : s->sublist(sub);
+    ParameterList& parent = sub == "Holes" ? s->sublist("Discretization").sublist("Holes") : s->sublist(sub);
     parent.sublist("<name>", false, "one " + what + ", under a name of the scene's choosing").setParameters(templateFor(sub));
   }
   return s;
@@ -484,13 +608,33 @@ void forEachParameter(const ParameterList& l, const std::string& key, const std:
   }
 }
 
+/// The schema's entry for a key pattern ("Regions/*/Side"), or null.
+const Teuchos::ParameterEntry* patternEntry(const std::string& pattern) {
+  std::vector<std::string> parts;
+  std::stringstream ss(pattern);
+  for (std::string part; std::getline(ss, part, '/');) parts.push_back(part);
+  const ParameterList* l = sceneSchema().get();
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    if (namedSublists().count(parts[i]) && i + 2 < parts.size() && parts[i + 1] == "*") {
+      l = &templateFor(parts[i]);
+      ++i;
+    } else if (l->isSublist(parts[i])) {
+      l = &l->sublist(parts[i]);
+    } else {
+      return nullptr;
+    }
+  }
+  return l->getEntryPtr(parts.back());
+}
+
 /// The values the user gave (before defaults): enumerated strings matched exactly, array
 /// lengths against the dimension.
 void checkGivenValues(const ParameterList& user, int dim, const std::string& file) {
   forEachParameter(user, "", "", [&](const std::string& key, const std::string& pattern, const Teuchos::ParameterEntry& e) {
-    const auto choices = choiceTable().find(pattern);
-    if (choices != choiceTable().end()) {
-      const auto& allowed = choices->second;
+    const Teuchos::ParameterEntry* schemaEntry = patternEntry(pattern);
+    const auto validator = schemaEntry ? schemaEntry->validator() : Teuchos::null;
+    if (!validator.is_null() && !validator->validStringValues().is_null()) {
+      const std::vector<std::string> allowed = validator->validStringValues()->toVector();
       const auto ok = [&](const std::string& v) { return std::find(allowed.begin(), allowed.end(), v) != allowed.end(); };
       if (e.isType<std::string>()) {
         const std::string v = Teuchos::getValue<std::string>(e);
@@ -544,6 +688,7 @@ void fillDefaults(ParameterList& user, const ParameterList& valid) {
       }
     } else if (!user.isParameter(name)) {
       user.setEntry(name, valid.entry(v));
+      user.getEntryRCP(name)->setValidator(Teuchos::null);  // the scene's list carries values only
     }
   }
 }
@@ -719,7 +864,7 @@ void applyOverride(ParameterList& pl, const std::string& spec, const ParameterLi
 }
 
 // ---------------------------------------------------------------------------------------------
-// Building
+// Building: one function per sublist, in the order of sceneSteps()
 // ---------------------------------------------------------------------------------------------
 
 Vec3 vec3(const Array<double>& a) {
@@ -728,26 +873,88 @@ Vec3 vec3(const Array<double>& a) {
   return v;
 }
 
-int componentIndex(const std::string& c) {
-  if (c == "x") return 0;
-  if (c == "y") return 1;
-  if (c == "z") return 2;
-  if (c == "all") return -1;
-  return -2;
-}
-
 std::string position(const Discretization& d, int p) {
   std::string s = "(";
   for (int a = 0; a < d.dim; ++a) s += (a ? ", " : "") + number(d.X[p][a]);
   return s + ")";
 }
 
-/// The int at path/key, refused outside [lo, hi].
+template <class T>
+std::string shownValue(T v) {
+  if constexpr (std::is_integral<T>::value)
+    return std::to_string(v);
+  else
+    return number(v);
+}
+
+/// One sublist of the scene (defaults filled) with its schema, named in messages by its path.
+struct Section {
+  const ParameterList& list;
+  const ParameterList& schema;
+  std::string path;
+  const std::string& file;
+
+  template <class T>
+  T get(const std::string& k) const {
+    return list.get<T>(k);
+  }
+  /// "'Path/Key'" for messages.
+  std::string key(const std::string& k) const { return "'" + path + "/" + k + "'"; }
+  /// An enumerated key's value, through the schema's validator.
+  template <class E>
+  E choice(const std::string& k) const {
+    return perinox::choice<E>(list, schema, k);
+  }
+  /// A number key's value, refused outside the schema's range for it.
+  template <class T>
+  T ranged(const std::string& k) const {
+    const T v = list.get<T>(k);
+    const auto r = Teuchos::rcp_dynamic_cast<const Range<T>>(schema.getEntry(k).validator(), true);
+    if (!r->holds(v))
+      fail(file, key(k) + " must be " + r->phrase() + ", not " + shownValue(v) + (r->note().empty() ? "" : " (" + r->note() + ")"));
+    return v;
+  }
+  Section sub(const std::string& name) const { return {list.sublist(name), schema.sublist(name), path + "/" + name, file}; }
+  /// The entry `name` of a named sublist (Regions, Loads, ...), against its template.
+  Section entry(const std::string& name, const std::string& named) const {
+    return {list.sublist(name), templateFor(named), path + "/" + name, file};
+  }
+};
+
+/// What the sublist functions read and fill.
+struct SceneBuild {
+  Scene& sc;
+  ProblemSpec& problem;
+  const ParameterList& pl;  // the scene, defaults filled
+  const ParameterList& schema;
+  const std::string& file;
+  const std::string& presetDir;
+  int dim;
+  ExodusMesh mesh;  // Type = Exodus: the mesh's blocks and sets, for the regions
+
+  Section section(const std::string& name) const { return {pl.sublist(name), schema.sublist(name), name, file}; }
+  const std::vector<int>& region(const std::string& key, const std::string& name) const {
+    auto it = sc.regions.find(name);
+    if (it == sc.regions.end()) fail(file, "'" + key + "' names region '" + name + "', which is not defined under Regions");
+    return it->second;
+  }
+  /// A path given in the scene, relative to the scene file's folder.
+  std::string relativeToScene(std::string path) const {
+    if (!path.empty() && path[0] != '/') {
+      const auto slash = file.rfind('/');
+      if (slash != std::string::npos) path = file.substr(0, slash + 1) + path;
+    }
+    return path;
+  }
+};
+
 /// The particles of a region of Type Node Set, Side Set (Exodus meshes) or Block (any
 /// discretisation), chosen by the set's or block's Name or Id.
-std::vector<int> meshSetRegion(const ExodusMesh& mesh, const Discretization& d, const std::string& dtype,
-                               const ParameterList& r, const std::string& region, const std::string& type,
-                               const std::string& file) {
+std::vector<int> meshSetRegion(const SceneBuild& b, const Section& r, const std::string& region, const std::string& type) {
+  const ExodusMesh& mesh = b.mesh;
+  const Discretization& d = b.problem.disc;
+  const std::string& file = b.file;
+  const bool exodus = b.pl.sublist("Discretization").get<std::string>("Type") == "Exodus";
   const std::string key = "'Regions/" + region + "/";
   const std::string name = r.get<std::string>("Name");
   const int id = r.get<int>("Id");
@@ -758,8 +965,8 @@ std::vector<int> meshSetRegion(const ExodusMesh& mesh, const Discretization& d, 
   if (type == "Block") {
     int blockId = id;
     if (!name.empty()) {
-      if (dtype != "Exodus") fail(file, key + "Name' names a block, but only Exodus blocks have names; give its Id");
-      auto it = std::find_if(mesh.blocks.begin(), mesh.blocks.end(), [&](const MeshBlock& b) { return b.name == name; });
+      if (!exodus) fail(file, key + "Name' names a block, but only Exodus blocks have names; give its Id");
+      auto it = std::find_if(mesh.blocks.begin(), mesh.blocks.end(), [&](const MeshBlock& blk) { return blk.name == name; });
       if (it == mesh.blocks.end()) fail(file, "region '" + region + "': the mesh has no element block named '" + name + "'");
       blockId = it->id;
     }
@@ -769,7 +976,7 @@ std::vector<int> meshSetRegion(const ExodusMesh& mesh, const Discretization& d, 
     if (ids.empty()) fail(file, "region '" + region + "': no particle is in block " + std::to_string(blockId));
     return ids;
   }
-  if (dtype != "Exodus") fail(file, "region '" + region + "' is a " + type + ", which needs 'Discretization/Type' = Exodus");
+  if (!exodus) fail(file, "region '" + region + "' is a " + type + ", which needs 'Discretization/Type' = Exodus");
   const auto& sets = type == "Node Set" ? mesh.nodeSets : mesh.sideSets;
   for (const auto& s : sets)
     if (name.empty() ? s.id == id : s.name == name) {
@@ -777,15 +984,6 @@ std::vector<int> meshSetRegion(const ExodusMesh& mesh, const Discretization& d, 
       return s.particles;
     }
   fail(file, "region '" + region + "': the mesh has no " + type + " with " + what);
-}
-
-int intIn(const ParameterList& l, const std::string& path, const std::string& key, int lo, int hi, const std::string& file) {
-  const int v = l.get<int>(key);
-  if (v < lo || v > hi)
-    fail(file, "'" + path + "/" + key + "' must be " +
-                   (hi == INT_MAX ? "at least " + std::to_string(lo) : "from " + std::to_string(lo) + " to " + std::to_string(hi)) +
-                   ", not " + std::to_string(v));
-  return v;
 }
 
 void checkHorizonFactor(double f, const std::string& file) {
@@ -854,200 +1052,184 @@ double hydrostaticStretch(double lambda, double mu, double traction, const std::
   return x;
 }
 
-}  // namespace
-
-Teuchos::RCP<const ParameterList> sceneSchema() {
-  static auto s = buildSchema();
-  return s;
+void readMaterial(SceneBuild& b) {
+  const Section m = b.section("Material");
+  MaterialSpec& mat = b.problem.material;
+  mat.dim = b.dim;
+  mat.kind = m.choice<MaterialKind>("Model");
+  mat.planar = b.dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
+  mat.E = m.ranged<double>("Young's Modulus");
+  mat.nu = m.ranged<double>("Poisson's Ratio");
 }
 
-Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir) {
-  const auto schema = sceneSchema();
-  checkAgainst(pl, *schema, "", file);
-  const auto& given = pl.sublist("Discretization");
-  const int dim = given.isParameter("Dimension") ? given.get<int>("Dimension") : schema->sublist("Discretization").get<int>("Dimension");
-  if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
-  checkGivenValues(pl, dim, file);
-  fillDefaults(pl, *schema);
-  checkFinite(pl, file);
+/// Discretization/Holes of a lattice.
+std::vector<Hole> readHoles(const Section& dl, int dim) {
+  std::vector<Hole> holes;
+  const Section hs = dl.sub("Holes");
+  for (auto h = hs.list.begin(); h != hs.list.end(); ++h) {
+    const Section hl = hs.entry(hs.list.name(h), "Holes");
+    Hole hole;
+    hole.center = vec3(hl.get<Array<double>>("Center"));
+    hole.kind = hl.choice<Hole::Kind>("Shape");
+    if (hole.kind == Hole::Kind::Circle) {
+      hole.radius = hl.ranged<double>("Radius");
+    } else {
+      hole.halfWidths = vec3(hl.get<Array<double>>("Half Widths"));
+      if (!(hole.halfWidths.head(dim).minCoeff() > 0)) fail(dl.file, hl.key("Half Widths") + " must be positive on every axis");
+    }
+    holes.push_back(hole);
+  }
+  return holes;
+}
 
-  Scene sc;
-  sc.file = file;
-  sc.title = pl.get<std::string>("Title");
-  auto problem = std::make_shared<ProblemSpec>();
+/// The lattice's particle counts: Particles, or a Spacing that divides the box.
+void latticeCounts(const Section& dl, LatticeSpec& ls) {
+  const std::string& file = dl.file;
+  const auto counts = dl.get<Array<int>>("Particles");
+  const double spacing = dl.get<double>("Spacing");
+  if (!counts.empty() && spacing != 0) fail(file, "'Discretization' gives both Particles and Spacing; give one of them");
+  if (!counts.empty()) {
+    for (int a = 0; a < ls.dim; ++a) {
+      if (counts[a] < 1) fail(file, "'Discretization/Particles' counts must be at least 1");
+      ls.counts[a] = counts[a];
+    }
+    return;
+  }
+  if (!(spacing > 0)) fail(file, "'Discretization' needs Particles (counts per axis) or a positive Spacing");
+  for (int a = 0; a < ls.dim; ++a) {
+    const double cells = (ls.upper[a] - ls.lower[a]) / spacing;
+    const std::string along = std::string(" along ") + "xyz"[a];
+    if (!(cells <= kMaxParticles))
+      fail(file, "'Discretization/Spacing' = " + number(spacing) + " gives more than " + std::to_string(kMaxParticles) + " particles" + along);
+    ls.counts[a] = static_cast<int>(std::lround(cells));
+    if (ls.counts[a] < 1 || std::abs(cells - ls.counts[a]) > 1e-6 * cells)
+      fail(file, "'Discretization/Spacing' = " + number(spacing) + " does not divide the box" + along + " (" + number(cells) +
+                     " spacings); adjust it or give Particles");
+  }
+}
 
-  // --- material --- (enumerated values are checked by checkGivenValues)
-  const auto& dl = pl.sublist("Discretization");
-  const auto& ml = pl.sublist("Material");
-  MaterialSpec mat;
-  mat.dim = dim;
-  mat.kind = ml.get<std::string>("Model") == "Hencky" ? MaterialKind::Hencky : MaterialKind::SmallStrain;
-  if (dim == 2)
-    mat.planar = ml.get<std::string>("Plane") == "Plane Strain" ? PlanarMode::PlaneStrain : PlanarMode::PlaneStress;
-  else
-    mat.planar = PlanarMode::None;
-  mat.E = ml.get<double>("Young's Modulus");
-  mat.nu = ml.get<double>("Poisson's Ratio");
-  if (!(mat.E > 0) || !std::isfinite(mat.E)) fail(file, "'Material/Young's Modulus' must be positive");
-  if (!(mat.nu > -1.0 && mat.nu < 0.5))
-    fail(file, "'Material/Poisson's Ratio' must satisfy -1 < nu < 0.5 (nu = 0.5 is incompressible: the Lame constant lambda is infinite)");
-  problem->material = mat;
+Discretization readLattice(const Section& dl, int dim, double thickness) {
+  const std::string& file = dl.file;
+  LatticeSpec ls;
+  ls.dim = dim;
+  ls.lower = vec3(dl.get<Array<double>>("Lower Corner"));
+  ls.upper = vec3(dl.get<Array<double>>("Upper Corner"));
+  for (int a = 0; a < dim; ++a)
+    if (!(ls.upper[a] > ls.lower[a])) fail(file, "'Discretization/Upper Corner' must exceed 'Lower Corner' on every axis");
+  latticeCounts(dl, ls);
+  ls.thickness = thickness;
+  ls.horizonFactor = dl.get<double>("Horizon Factor");
+  if (dl.get<double>("Horizon") != 0) fail(file, "'Discretization/Horizon' is for particle files; lattices use 'Horizon Factor'");
+  checkHorizonFactor(ls.horizonFactor, file);
+  for (const auto& s : dl.get<Array<std::string>>("Fictitious Sides")) {
+    Side side = Side::XMin;
+    parseSide(s, side);
+    if (static_cast<int>(side) / 2 >= dim)
+      fail(file, "'Discretization/Fictitious Sides' has '" + s + "', which is not a side of this " + std::to_string(dim) + "D body");
+    ls.fictitiousSides.push_back(side);
+  }
+  checkLatticeSize(ls, file);
+  ls.jitter = dl.ranged<double>("Jitter");
+  ls.jitterSeed = static_cast<unsigned>(dl.ranged<int>("Jitter Seed"));
+  ls.holes = readHoles(dl, dim);
+  return buildLattice(ls);
+}
 
-  // --- discretisation ---
+/// The horizon of a particle file or mesh: Horizon, or Horizon Factor x the spacing, within [1, 50] spacings.
+double particleHorizon(const Section& dl, double spacing, const std::string& spacingNote) {
+  double horizon = dl.get<double>("Horizon");
+  if (horizon < 0) fail(dl.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
+  if (horizon == 0) {
+    checkHorizonFactor(dl.get<double>("Horizon Factor"), dl.file);
+    horizon = dl.get<double>("Horizon Factor") * spacing;
+  }
+  if (!(horizon >= spacing && horizon <= kMaxHorizonFactor * spacing))
+    fail(dl.file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
+                      number(spacing) + " to " + number(kMaxHorizonFactor * spacing) + spacingNote + ")");
+  return horizon;
+}
+
+Discretization readParticles(const SceneBuild& b, const Section& dl, double thickness) {
+  std::string path = dl.get<std::string>("Particle File");
+  if (path.empty()) fail(b.file, "'Discretization/Particle File' is required when Type = Particle File");
+  path = b.relativeToScene(path);
+  const double spacing = dl.get<double>("Spacing");
+  if (!(spacing > 0)) fail(b.file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
+  if (dl.get<double>("Horizon") < 0) fail(b.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
+  return readParticleFile(path, b.dim, particleHorizon(dl, spacing, ""), spacing, thickness);
+}
+
+Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
+  const std::string& file = b.file;
+  const std::string path = b.relativeToScene(dl.get<std::string>("Mesh File"));
+  if (path.empty()) fail(file, "'Discretization/Mesh File' is required when Type = Exodus");
+  if (!exodusAvailable())
+    fail(file, "'Discretization/Type' = Exodus, but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
+  if (!dl.get<Array<std::string>>("Fictitious Sides").empty())
+    fail(file, "'Discretization/Fictitious Sides' is for lattices; an Exodus mesh's boundary conditions act on its node sets");
+  const double given = dl.get<double>("Spacing");
+  if (given < 0) fail(file, "'Discretization/Spacing' must be positive (or 0: from the mesh)");
+  if (dl.get<double>("Horizon") < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
+  b.mesh = readExodusMesh(path, b.dim, thickness);
+  Discretization& md = b.mesh.disc;
+  if (given > 0) md.dx = given;
+  md.horizon = particleHorizon(dl, md.dx, given > 0 ? "" : ", the spacing taken from the mesh");
+  buildFamilies(md);
+  return md;
+}
+
+void readDiscretization(SceneBuild& b) {
+  const Section dl = b.section("Discretization");
   const std::string dtype = dl.get<std::string>("Type");
-  const double thickness = dl.get<double>("Thickness");
-  if (!(thickness > 0)) fail(file, "'Discretization/Thickness' must be positive");
-  ExodusMesh mesh;  // Type = Exodus: the mesh's blocks and sets, for the regions below
-  auto relativeToScene = [&](std::string path) {
-    if (!path.empty() && path[0] != '/') {
-      const auto slash = file.rfind('/');
-      if (slash != std::string::npos) path = file.substr(0, slash + 1) + path;
-    }
-    return path;
-  };
+  const double thickness = dl.ranged<double>("Thickness");
   if (dtype != "Exodus" && !dl.get<std::string>("Mesh File").empty())
-    fail(file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
+    fail(b.file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
   try {
-    if (dtype == "Lattice") {
-      LatticeSpec ls;
-      ls.dim = dim;
-      ls.lower = vec3(dl.get<Array<double>>("Lower Corner"));
-      ls.upper = vec3(dl.get<Array<double>>("Upper Corner"));
-      const auto counts = dl.get<Array<int>>("Particles");
-      const double spacing = dl.get<double>("Spacing");
-      for (int a = 0; a < dim; ++a)
-        if (!(ls.upper[a] > ls.lower[a])) fail(file, "'Discretization/Upper Corner' must exceed 'Lower Corner' on every axis");
-      if (!counts.empty() && spacing != 0)
-        fail(file, "'Discretization' gives both Particles and Spacing; give one of them");
-      if (!counts.empty()) {
-        for (int a = 0; a < dim; ++a) {
-          if (counts[a] < 1) fail(file, "'Discretization/Particles' counts must be at least 1");
-          ls.counts[a] = counts[a];
-        }
-      } else if (spacing > 0) {
-        for (int a = 0; a < dim; ++a) {
-          const double cells = (ls.upper[a] - ls.lower[a]) / spacing;
-          const std::string along = std::string(" along ") + "xyz"[a];
-          if (!(cells <= kMaxParticles))
-            fail(file, "'Discretization/Spacing' = " + number(spacing) + " gives more than " + std::to_string(kMaxParticles) + " particles" + along);
-          ls.counts[a] = static_cast<int>(std::lround(cells));
-          if (ls.counts[a] < 1 || std::abs(cells - ls.counts[a]) > 1e-6 * cells)
-            fail(file, "'Discretization/Spacing' = " + number(spacing) + " does not divide the box" + along + " (" +
-                           number(cells) + " spacings); adjust it or give Particles");
-        }
-      } else {
-        fail(file, "'Discretization' needs Particles (counts per axis) or a positive Spacing");
-      }
-      ls.thickness = thickness;
-      ls.horizonFactor = dl.get<double>("Horizon Factor");
-      if (dl.get<double>("Horizon") != 0) fail(file, "'Discretization/Horizon' is for particle files; lattices use 'Horizon Factor'");
-      checkHorizonFactor(ls.horizonFactor, file);
-      for (const auto& s : dl.get<Array<std::string>>("Fictitious Sides")) {
-        Side side = Side::XMin;
-        parseSide(s, side);
-        if (static_cast<int>(side) / 2 >= dim)
-          fail(file, "'Discretization/Fictitious Sides' has '" + s + "', which is not a side of this " + std::to_string(dim) + "D body");
-        ls.fictitiousSides.push_back(side);
-      }
-      checkLatticeSize(ls, file);
-      ls.jitter = dl.get<double>("Jitter");
-      if (ls.jitter < 0 || ls.jitter >= 1) fail(file, "'Discretization/Jitter' must be in [0, 1)");
-      ls.jitterSeed = static_cast<unsigned>(intIn(dl, "Discretization", "Jitter Seed", 0, INT_MAX, file));
-      const auto& holes = dl.sublist("Holes");
-      for (auto h = holes.begin(); h != holes.end(); ++h) {
-        const auto& hl = holes.sublist(holes.name(h));
-        Hole hole;
-        hole.center = vec3(hl.get<Array<double>>("Center"));
-        if (hl.get<std::string>("Shape") == "Circle") {
-          hole.kind = Hole::Kind::Circle;
-          hole.radius = hl.get<double>("Radius");
-          if (!(hole.radius > 0)) fail(file, "'Discretization/Holes/" + holes.name(h) + "/Radius' must be positive");
-        } else {
-          hole.kind = Hole::Kind::Rectangle;
-          hole.halfWidths = vec3(hl.get<Array<double>>("Half Widths"));
-          if (!(hole.halfWidths.head(dim).minCoeff() > 0))
-            fail(file, "'Discretization/Holes/" + holes.name(h) + "/Half Widths' must be positive on every axis");
-        }
-        ls.holes.push_back(hole);
-      }
-      problem->disc = buildLattice(ls);
-    } else if (dtype == "Particle File") {
-      std::string path = dl.get<std::string>("Particle File");
-      if (path.empty()) fail(file, "'Discretization/Particle File' is required when Type = Particle File");
-      path = relativeToScene(path);
-      const double spacing = dl.get<double>("Spacing");
-      double horizon = dl.get<double>("Horizon");
-      if (!(spacing > 0)) fail(file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
-      if (horizon < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-      if (horizon == 0) {
-        checkHorizonFactor(dl.get<double>("Horizon Factor"), file);
-        horizon = dl.get<double>("Horizon Factor") * spacing;
-      }
-      if (!(horizon >= spacing && horizon <= kMaxHorizonFactor * spacing))
-        fail(file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
-                       number(spacing) + " to " + number(kMaxHorizonFactor * spacing) + ")");
-      problem->disc = readParticleFile(path, dim, horizon, spacing, thickness);
-    } else if (dtype == "Exodus") {
-      const std::string path = relativeToScene(dl.get<std::string>("Mesh File"));
-      if (path.empty()) fail(file, "'Discretization/Mesh File' is required when Type = Exodus");
-      if (!exodusAvailable())
-        fail(file, "'Discretization/Type' = Exodus, but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
-      if (!dl.get<Array<std::string>>("Fictitious Sides").empty())
-        fail(file, "'Discretization/Fictitious Sides' is for lattices; an Exodus mesh's boundary conditions act on its node sets");
-      const double given = dl.get<double>("Spacing");
-      double horizon = dl.get<double>("Horizon");
-      if (given < 0) fail(file, "'Discretization/Spacing' must be positive (or 0: from the mesh)");
-      if (horizon < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-      mesh = readExodusMesh(path, dim, thickness);
-      Discretization& md = mesh.disc;
-      if (given > 0) md.dx = given;
-      if (horizon == 0) {
-        checkHorizonFactor(dl.get<double>("Horizon Factor"), file);
-        horizon = dl.get<double>("Horizon Factor") * md.dx;
-      }
-      if (!(horizon >= md.dx && horizon <= kMaxHorizonFactor * md.dx))
-        fail(file, "'Discretization/Horizon' must be from the spacing to " + number(kMaxHorizonFactor) + " x the spacing (" +
-                       number(md.dx) + " to " + number(kMaxHorizonFactor * md.dx) + (given > 0 ? ")" : ", the spacing taken from the mesh)"));
-      md.horizon = horizon;
-      buildFamilies(md);
-      problem->disc = md;
-    }
+    if (dtype == "Lattice")
+      b.problem.disc = readLattice(dl, b.dim, thickness);
+    else if (dtype == "Particle File")
+      b.problem.disc = readParticles(b, dl, thickness);
+    else
+      b.problem.disc = readMesh(b, dl, thickness);
   } catch (const std::invalid_argument& e) {
-    fail(file, std::string("Discretization: ") + e.what());
+    fail(b.file, std::string("Discretization: ") + e.what());
   } catch (const SceneError&) {
     throw;
   } catch (const std::runtime_error& e) {
-    fail(file, std::string("Discretization: ") + e.what());
+    fail(b.file, std::string("Discretization: ") + e.what());
   }
-  parsePartition(dl.get<std::string>("Partition"), problem->partition);  // a choice: validated
-  const Discretization& d = problem->disc;
+  b.problem.partition = dl.choice<PartitionMethod>("Partition");
+}
 
-  // --- effects ---
-  const auto& mo = pl.sublist("Model");
-  const std::string stab = mo.get<std::string>("Stabilization");
-  const double G = mo.get<double>("G");
-  if (!(G >= 0) || !std::isfinite(G)) fail(file, "'Model/G' must be a finite number >= 0");
-  if (stab == "Silling") {
-    problem->stabilization = G > 0;
-    problem->stab.G = G;
-    problem->stab.C = micromodulusC(mat, d.horizon, d.thickness);
+/// Model/Stabilization and G. The micromodulus is the library's (ProblemSpec::stabilizationSpec).
+void readStabilization(SceneBuild& b) {
+  const Section mo = b.section("Model");
+  const double G = mo.ranged<double>("G");
+  if (mo.get<std::string>("Stabilization") == "Silling") {
+    b.problem.stabilization = G > 0;
+    b.problem.stab.G = G;
   } else if (G > 0) {
-    fail(file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
+    fail(b.file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
   }
+}
 
-  // --- heterogeneous modulus ---
-  const std::string field = ml.get<std::string>("Modulus Field");
-  const double fa = ml.get<double>("Field Alpha"), fb = ml.get<double>("Field Beta"), fl = ml.get<double>("Field Length");
-  if (field == "Seed001 Bar") {
-    if (!(fa > 0 && fb > 0 && fl > 0)) fail(file, "'Material/Field Alpha', 'Field Beta' and 'Field Length' must be positive");
-    problem->modulusScale.resize(d.size());
-    for (int p = 0; p < d.size(); ++p) {
-      const double xr = d.X[p][0] / fl;
-      problem->modulusScale[p] = xr <= 0.5 ? 1.0 : 1.0 / (1.0 + fb / (2 * fa) / std::sqrt(xr - 0.5));
-    }
+/// Material/Modulus Field: a per-particle modulus scale.
+void readModulusField(SceneBuild& b) {
+  const Section ml = b.section("Material");
+  if (ml.get<std::string>("Modulus Field") != "Seed001 Bar") return;
+  const double fa = ml.ranged<double>("Field Alpha"), fb = ml.ranged<double>("Field Beta"), fl = ml.ranged<double>("Field Length");
+  const Discretization& d = b.problem.disc;
+  b.problem.modulusScale.resize(d.size());
+  for (int p = 0; p < d.size(); ++p) {
+    const double xr = d.X[p][0] / fl;
+    b.problem.modulusScale[p] = xr <= 0.5 ? 1.0 : 1.0 / (1.0 + fb / (2 * fa) / std::sqrt(xr - 0.5));
   }
+}
 
-  // --- zero-energy controls (seed 001) ---
+/// Model/Zero-Energy Control (seed 001): springs, average displacement states or stress points.
+void readControls(SceneBuild& b) {
+  const Section mo = b.section("Model");
+  const Discretization& d = b.problem.disc;
   const std::string ctrl = mo.get<std::string>("Zero-Energy Control");
   double cc = mo.get<double>("Control Constant");
   if (ctrl == "Springs" || ctrl == "Average Displacement") {
@@ -1057,138 +1239,138 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
       const std::map<int, std::pair<double, double>> table{{100, {0.8, 60}}, {200, {1.28, 150}}, {500, {2, 500}}, {1000, {3, 1750}}};
       auto it = table.find(nreal);
       if (it == table.end())
-        fail(file, "'Model/Control Constant' is not set and seed 001's Table 1 has no value for " + std::to_string(nreal) + " particles (only 100, 200, 500, 1000)");
+        fail(b.file, "'Model/Control Constant' is not set and seed 001's Table 1 has no value for " + std::to_string(nreal) + " particles (only 100, 200, 500, 1000)");
       cc = ctrl == "Springs" ? it->second.first : it->second.second;
     }
-    problem->control = true;
-    problem->controlSpec.kind = ctrl == "Springs" ? ControlSpec::Kind::Springs : ControlSpec::Kind::AverageDisplacement;
-    problem->controlSpec.C = cc;
+    b.problem.control = true;
+    b.problem.controlSpec.kind = ctrl == "Springs" ? ControlSpec::Kind::Springs : ControlSpec::Kind::AverageDisplacement;
+    b.problem.controlSpec.C = cc;
   } else if (ctrl == "Stress Points") {
-    if (d.horizon > 1.5 * d.dx) fail(file, "stress points use nearest-neighbour families (seed 001): set 'Discretization/Horizon Factor' below 1.5");
-    problem->stressPoints = true;
-    problem->stressPointSeed = static_cast<unsigned>(intIn(mo, "Model", "Stress Point Seed", 0, INT_MAX, file));
+    if (d.horizon > 1.5 * d.dx) fail(b.file, "stress points use nearest-neighbour families (seed 001): set 'Discretization/Horizon Factor' below 1.5");
+    b.problem.stressPoints = true;
+    b.problem.stressPointSeed = static_cast<unsigned>(mo.ranged<int>("Stress Point Seed"));
   }
+}
 
-  // --- damage ---
-  const auto& dm = pl.sublist("Damage");
-  sc.maxBreakRounds = intIn(dm, "Damage", "Max Break Rounds", 1, INT_MAX, file);
-  if (dm.get<bool>("Enabled")) {
-    problem->damage = true;
-    problem->damageSpec.sCr = dm.get<double>("Critical Stretch");
-    problem->damageSpec.sMin = dm.get<double>("Softening Start");
-    problem->damageSpec.beta = dm.get<double>("Beta");
-    const auto& ds = problem->damageSpec;
-    if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
-      fail(file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
-    if (!(ds.beta > 0)) fail(file, "'Damage/Beta' must be positive");
-    problem->damageSpec.softening =
-        dm.get<std::string>("Softening") == "Paper" ? DamageSpec::Softening::Paper : DamageSpec::Softening::Continuous;
-    sc.stallBreak = dm.get<std::string>("On Stall") == "Break Most Stretched";
-    sc.stallBreakTolerance = dm.get<double>("Stall Break Tolerance");
-    if (!(sc.stallBreakTolerance >= 0 && sc.stallBreakTolerance < 1))
-      fail(file, "'Damage/Stall Break Tolerance' must be in [0, 1)");
-    sc.maxStallBreaks = intIn(dm, "Damage", "Max Stall Breaks", 1, INT_MAX, file);
-    sc.reloadTolerance = dm.get<double>("Reload Tolerance");
-    if (!(sc.reloadTolerance > 0 && sc.reloadTolerance < 0.5))
-      fail(file, "'Damage/Reload Tolerance' must be in (0, 0.5)");
-  }
+void readDamage(SceneBuild& b) {
+  const Section dm = b.section("Damage");
+  Scene& sc = b.sc;
+  sc.maxBreakRounds = dm.ranged<int>("Max Break Rounds");
+  if (!dm.get<bool>("Enabled")) return;
+  DamageSpec& ds = b.problem.damageSpec;
+  b.problem.damage = true;
+  ds.sCr = dm.get<double>("Critical Stretch");
+  ds.sMin = dm.get<double>("Softening Start");
+  if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
+    fail(b.file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
+  ds.beta = dm.ranged<double>("Beta");
+  ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+  sc.stallBreak = dm.get<std::string>("On Stall") == "Break Most Stretched";
+  sc.stallBreakTolerance = dm.ranged<double>("Stall Break Tolerance");
+  sc.maxStallBreaks = dm.ranged<int>("Max Stall Breaks");
+  sc.reloadTolerance = dm.ranged<double>("Reload Tolerance");
+}
 
-  // --- regions ---
-  const auto& rl = pl.sublist("Regions");
-  for (auto it = rl.begin(); it != rl.end(); ++it) {
-    const std::string name = rl.name(it);
-    const auto& r = rl.sublist(name);
-    const std::string type = r.get<std::string>("Type");
-    const std::string popName = r.get<std::string>("Population");
-    const Population pop = popName == "Fictitious" ? Population::Fictitious : popName == "All" ? Population::All : Population::Real;
-    const bool anyFictitious = std::any_of(d.fictitious.begin(), d.fictitious.end(), [](std::uint8_t f) { return f != 0; });
-    if (!anyFictitious && (type == "All Fictitious" || type == "Fictitious Side" || ((type == "Box" || type == "Nearest") && popName == "Fictitious")))
-      fail(file, "region '" + name + "' selects fictitious particles, but the body has none (see 'Discretization/Fictitious Sides')");
-    std::vector<int> ids;
-    auto side = [&]() {
-      Side s = Side::XMin;
-      parseSide(r.get<std::string>("Side"), s);
-      if (static_cast<int>(s) / 2 >= dim)
-        fail(file, "'Regions/" + name + "/Side' is not a side of this " + std::to_string(dim) + "D body");
-      return s;
-    };
-    if (type == "Box") {
-      ids = selectBox(d, vec3(r.get<Array<double>>("Lower")), vec3(r.get<Array<double>>("Upper")), pop);
-    } else if (type == "Side Layer") {
-      const double given = r.get<double>("Thickness");
-      if (given < 0) fail(file, "'Regions/" + name + "/Thickness' must be >= 0 (0: one particle spacing)");
-      const double t = given > 0 ? given : d.dx;
-      ids = selectSideLayer(d, side(), t * (1 - 1e-9));
-    } else if (type == "Fictitious Side") {
-      ids = selectFictitiousSide(d, side());
-    } else if (type == "Nearest") {
-      const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
-      if (p >= 0) ids.push_back(p);
-    } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
-      ids = meshSetRegion(mesh, d, dtype, r, name, type, file);
-    } else {  // All Fictitious or All Real
-      for (int i = 0; i < d.size(); ++i)
-        if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
-    }
-    if (ids.empty()) fail(file, "region '" + name + "' selects no particle");
-    sc.regions[name] = ids;
-  }
-  auto region = [&](const std::string& key, const std::string& name) -> const std::vector<int>& {
-    auto it = sc.regions.find(name);
-    if (it == sc.regions.end()) fail(file, "'" + key + "' names region '" + name + "', which is not defined under Regions");
-    return it->second;
+/// One region's particles.
+std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::string& name) {
+  const Discretization& d = b.problem.disc;
+  const std::string type = r.get<std::string>("Type");
+  const std::string popName = r.get<std::string>("Population");
+  const Population pop = r.choice<Population>("Population");
+  const bool anyFictitious = std::any_of(d.fictitious.begin(), d.fictitious.end(), [](std::uint8_t f) { return f != 0; });
+  if (!anyFictitious && (type == "All Fictitious" || type == "Fictitious Side" || ((type == "Box" || type == "Nearest") && popName == "Fictitious")))
+    fail(b.file, "region '" + name + "' selects fictitious particles, but the body has none (see 'Discretization/Fictitious Sides')");
+  auto side = [&]() {
+    const Side s = r.choice<Side>("Side");
+    if (static_cast<int>(s) / 2 >= b.dim) fail(b.file, r.key("Side") + " is not a side of this " + std::to_string(b.dim) + "D body");
+    return s;
   };
+  std::vector<int> ids;
+  if (type == "Box") {
+    ids = selectBox(d, vec3(r.get<Array<double>>("Lower")), vec3(r.get<Array<double>>("Upper")), pop);
+  } else if (type == "Side Layer") {
+    const double given = r.ranged<double>("Thickness");
+    const double t = given > 0 ? given : d.dx;
+    ids = selectSideLayer(d, side(), t * (1 - 1e-9));
+  } else if (type == "Fictitious Side") {
+    ids = selectFictitiousSide(d, side());
+  } else if (type == "Nearest") {
+    const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
+    if (p >= 0) ids.push_back(p);
+  } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
+    ids = meshSetRegion(b, r, name, type);
+  } else {  // All Fictitious or All Real
+    for (int i = 0; i < d.size(); ++i)
+      if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
+  }
+  if (ids.empty()) fail(b.file, "region '" + name + "' selects no particle");
+  return ids;
+}
 
-  // --- boundary conditions ---
-  const int n = d.size();
-  problem->fixedMask.assign(n, 0);
-  problem->prescribed.assign(static_cast<std::size_t>(n) * dim, 0.0);
-  problem->bodyForce.assign(static_cast<std::size_t>(n) * dim, 0.0);
-  const auto& bl = pl.sublist("Boundary Conditions");
-  // The condition that prescribed each DOF first: another may prescribe it again only with the
-  // same value (overlapping regions at a corner, say), never a different one.
+void readRegions(SceneBuild& b) {
+  const Section rl = b.section("Regions");
+  for (auto it = rl.list.begin(); it != rl.list.end(); ++it) {
+    const std::string name = rl.list.name(it);
+    b.sc.regions[name] = selectRegion(b, rl.entry(name, "Regions"), name);
+  }
+}
+
+/// Boundary Conditions: prescribed components. A component prescribed twice must get the same
+/// value from both conditions (overlapping regions at a corner, say); the conditions must remove
+/// every rigid-body mode.
+void readBoundaryConditions(SceneBuild& b) {
+  ProblemSpec& P = b.problem;
+  const Discretization& d = P.disc;
+  const int n = d.size(), dim = b.dim;
+  P.fixedMask.assign(n, 0);
+  P.prescribed.assign(static_cast<std::size_t>(n) * dim, 0.0);
+  P.bodyForce.assign(static_cast<std::size_t>(n) * dim, 0.0);
+  const Section bl = b.section("Boundary Conditions");
+  // The condition that prescribed each DOF first.
   std::vector<std::string> conditionNames;
   std::vector<int> prescribedBy(static_cast<std::size_t>(n) * dim, -1);
-  for (auto it = bl.begin(); it != bl.end(); ++it) {
-    const std::string name = bl.name(it);
-    const auto& b = bl.sublist(name);
-    const auto& ids = region("Boundary Conditions/" + name + "/Region", b.get<std::string>("Region"));
-    const int comp = componentIndex(b.get<std::string>("Component"));
+  for (auto it = bl.list.begin(); it != bl.list.end(); ++it) {
+    const std::string name = bl.list.name(it);
+    const Section c = bl.entry(name, "Boundary Conditions");
+    const auto& ids = b.region("Boundary Conditions/" + name + "/Region", c.get<std::string>("Region"));
+    const int comp = c.choice<int>("Component");
     if (comp >= dim)
-      fail(file, "'Boundary Conditions/" + name + "/Component' must be one of x" + std::string(dim > 1 ? ", y" : "") + (dim > 2 ? ", z" : "") + " or all");
-    const double value = b.get<double>("Value");
-    const auto grad = b.get<Array<double>>("Gradient");
+      fail(b.file, c.key("Component") + " must be one of x" + std::string(dim > 1 ? ", y" : "") + (dim > 2 ? ", z" : "") + " or all");
+    const double value = c.get<double>("Value");
+    const auto grad = c.get<Array<double>>("Gradient");
     conditionNames.push_back(name);
     for (int p : ids)
-      for (int c = 0; c < dim; ++c) {
-        if (comp >= 0 && c != comp) continue;
+      for (int k = 0; k < dim; ++k) {
+        if (comp >= 0 && k != comp) continue;
         double v = value;
         for (int a = 0; a < static_cast<int>(grad.size()); ++a) v += grad[a] * d.X[p][a];
-        const std::size_t dof = static_cast<std::size_t>(p) * dim + c;
+        const std::size_t dof = static_cast<std::size_t>(p) * dim + k;
         if (prescribedBy[dof] >= 0) {
-          const double old = problem->prescribed[dof];
+          const double old = P.prescribed[dof];
           if (std::abs(v - old) > 1e-12 * std::max({std::abs(v), std::abs(old), d.dx}))
-            fail(file, "boundary conditions '" + conditionNames[prescribedBy[dof]] + "' and '" + name + "' prescribe different values (" +
-                           number(old) + " and " + number(v) + ") for component " + "xyz"[c] + " of the particle at " + position(d, p) +
-                           "; a component may be prescribed twice only with the same value");
+            fail(b.file, "boundary conditions '" + conditionNames[prescribedBy[dof]] + "' and '" + name + "' prescribe different values (" +
+                             number(old) + " and " + number(v) + ") for component " + "xyz"[k] + " of the particle at " + position(d, p) +
+                             "; a component may be prescribed twice only with the same value");
           continue;
         }
         prescribedBy[dof] = static_cast<int>(conditionNames.size()) - 1;
-        problem->fixedMask[p] |= static_cast<std::uint8_t>(1u << c);
-        problem->prescribed[dof] = v;
+        P.fixedMask[p] |= static_cast<std::uint8_t>(1u << k);
+        P.prescribed[dof] = v;
       }
   }
-  // Rigid-body modes must be constrained: rank of the modes restricted to prescribed DOFs (the
-  // evaluator checks it too, for problems built in C++; here the message names the scene's keys).
-  if (!preventsRigidMotion(*problem))
-    fail(file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
+  // Rank of the rigid modes restricted to prescribed DOFs (the evaluator checks it too, for
+  // problems built in C++; here the message names the scene's keys).
+  if (!preventsRigidMotion(P))
+    fail(b.file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
+}
 
-  // --- loads ---
-  const auto& ll = pl.sublist("Loads");
-  for (auto it = ll.begin(); it != ll.end(); ++it) {
-    const std::string name = ll.name(it);
-    const auto& l = ll.sublist(name);
-    const auto& ids = region("Loads/" + name + "/Region", l.get<std::string>("Region"));
+void readLoads(SceneBuild& b) {
+  const Discretization& d = b.problem.disc;
+  const Section ll = b.section("Loads");
+  for (auto it = ll.list.begin(); it != ll.list.end(); ++it) {
+    const std::string name = ll.list.name(it);
+    const Section l = ll.entry(name, "Loads");
+    const auto& ids = b.region("Loads/" + name + "/Region", l.get<std::string>("Region"));
     const Vec3 value = vec3(l.get<Array<double>>("Value"));
     const std::string type = l.get<std::string>("Type");
     double totalV = 0;
@@ -1196,168 +1378,171 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
     // Per unit volume: Total Force spreads over the region; a Traction's layer is one spacing thick.
     const double scale = type == "Total Force" ? 1.0 / totalV : type == "Traction" ? 1.0 / d.dx : 1.0;
     for (int p : ids) {
-      if (d.fictitious[p]) fail(file, "load '" + name + "' acts on fictitious particles; loads go on real particles");
-      for (int c = 0; c < dim; ++c) problem->bodyForce[static_cast<std::size_t>(p) * dim + c] += value[c] * scale;
+      if (d.fictitious[p]) fail(b.file, "load '" + name + "' acts on fictitious particles; loads go on real particles");
+      for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += value[c] * scale;
     }
   }
+}
 
-  // --- superposed rotation ---
-  {
-    const auto& rl = pl.sublist("Superposed Rotation");
-    const double deg = rl.get<double>("Angle");
-    if (!std::isfinite(deg)) fail(file, "'Superposed Rotation/Angle' must be finite");
-    if (deg != 0.0) {
-      if (dim == 1) fail(file, "'Superposed Rotation' needs a 2D or 3D scene");
-      const auto& ca = rl.get<Array<double>>("Center");
-      Vec3 axis = vec3(rl.get<Array<double>>("Axis"));
-      if (dim == 2 && (axis[0] != 0 || axis[1] != 0 || !(axis[2] > 0)))
-        fail(file, "'Superposed Rotation/Axis' must be z ({0, 0, 1}) in 2D");
-      if (!(axis.norm() > 0)) fail(file, "'Superposed Rotation/Axis' must not be zero");
-      problem->rotation.angle = deg * M_PI / 180.0;
-      problem->rotation.axis = axis.normalized();
-      problem->rotation.center = vec3(ca);
-      if (dim == 2) problem->rotation.center[2] = 0;
-      // A partly constrained particle (a roller) would need its constraint direction turned with
-      // the body: not supported, so say which particle.
-      const std::uint8_t all = static_cast<std::uint8_t>((1u << dim) - 1);
-      for (int p = 0; p < n; ++p)
-        if (problem->fixedMask[p] != 0 && problem->fixedMask[p] != all)
-          fail(file, "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " +
-                         std::to_string(p) + " at " + position(d, p) + " has only some (a roller's direction would have to turn with the body)");
-    }
+void readRotation(SceneBuild& b) {
+  const Section rl = b.section("Superposed Rotation");
+  const double deg = rl.get<double>("Angle");
+  if (deg == 0.0) return;
+  const int dim = b.dim;
+  if (dim == 1) fail(b.file, "'Superposed Rotation' needs a 2D or 3D scene");
+  const Vec3 axis = vec3(rl.get<Array<double>>("Axis"));
+  if (dim == 2 && (axis[0] != 0 || axis[1] != 0 || !(axis[2] > 0))) fail(b.file, "'Superposed Rotation/Axis' must be z ({0, 0, 1}) in 2D");
+  if (!(axis.norm() > 0)) fail(b.file, "'Superposed Rotation/Axis' must not be zero");
+  auto& rot = b.problem.rotation;
+  rot.angle = deg * M_PI / 180.0;
+  rot.axis = axis.normalized();
+  rot.center = vec3(rl.get<Array<double>>("Center"));
+  if (dim == 2) rot.center[2] = 0;
+  // A partly constrained particle (a roller) would need its constraint direction turned with the
+  // body: not supported, so say which particle.
+  const std::uint8_t all = static_cast<std::uint8_t>((1u << dim) - 1);
+  for (int p = 0; p < b.problem.disc.size(); ++p)
+    if (b.problem.fixedMask[p] != 0 && b.problem.fixedMask[p] != all)
+      fail(b.file, "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " +
+                       std::to_string(p) + " at " + position(b.problem.disc, p) + " has only some (a roller's direction would have to turn with the body)");
+}
+
+void readProbes(SceneBuild& b) {
+  const Section pr = b.section("Probes");
+  for (auto it = pr.list.begin(); it != pr.list.end(); ++it) {
+    const std::string name = pr.list.name(it);
+    const Section p = pr.entry(name, "Probes");
+    b.sc.probes.push_back({name, p.get<std::string>("Quantity"), b.region("Probes/" + name + "/Region", p.get<std::string>("Region"))});
   }
+}
 
-  // --- probes ---
-  const auto& pr = pl.sublist("Probes");
-  for (auto it = pr.begin(); it != pr.end(); ++it) {
-    const std::string name = pr.name(it);
-    const auto& p = pr.sublist(name);
-    ProbeDef def;
-    def.name = name;
-    def.quantity = p.get<std::string>("Quantity");
-    def.particles = region("Probes/" + name + "/Region", p.get<std::string>("Region"));
-    sc.probes.push_back(def);
-  }
-
-  // --- reference ---
-  const auto& ref = pl.sublist("Reference");
-  sc.reference.type = ref.get<std::string>("Type");
-  sc.reference.center = vec3(ref.get<Array<double>>("Center"));
-  if (sc.reference.type == "Hydrostatic Hencky") {
-    if (dim != 2 || mat.planar != PlanarMode::PlaneStrain || mat.kind != MaterialKind::Hencky)
-      fail(file, "'Reference/Type' Hydrostatic Hencky needs a 2D plane-strain Hencky material");
-    sc.reference.stretch = hydrostaticStretch(lameLambda(mat), lameMu(mat), ref.get<double>("Traction"), file);
-  } else if (sc.reference.type == "Uniform Stretch") {
-    sc.reference.stretch = ref.get<double>("Stretch");
-    if (!(sc.reference.stretch > 0)) fail(file, "'Reference/Stretch' must be positive (l / l0)");
-  } else if (sc.reference.type == "Affine") {
+void readReference(SceneBuild& b) {
+  const Section ref = b.section("Reference");
+  const MaterialSpec& mat = b.problem.material;
+  ReferenceDef& r = b.sc.reference;
+  r.type = ref.get<std::string>("Type");
+  r.center = vec3(ref.get<Array<double>>("Center"));
+  if (r.type == "Hydrostatic Hencky") {
+    if (b.dim != 2 || mat.planar != PlanarMode::PlaneStrain || mat.kind != MaterialKind::Hencky)
+      fail(b.file, "'Reference/Type' Hydrostatic Hencky needs a 2D plane-strain Hencky material");
+    r.stretch = hydrostaticStretch(lameLambda(mat), lameMu(mat), ref.get<double>("Traction"), b.file);
+  } else if (r.type == "Uniform Stretch") {
+    r.stretch = ref.ranged<double>("Stretch");
+  } else if (r.type == "Affine") {
     const auto g = ref.get<Array<double>>("Gradient");
-    if (static_cast<int>(g.size()) != dim * dim)
-      fail(file, "'Reference/Gradient' needs " + std::to_string(dim * dim) + " entries (row-major)");
-    for (int a = 0; a < dim; ++a)
-      for (int b = 0; b < dim; ++b) sc.reference.H(a, b) = g[a * dim + b];
-  } else if (sc.reference.type == "Seed001 Bar") {
-    if (dim != 1) fail(file, "'Reference/Type' Seed001 Bar needs a 1D scene");
-    sc.reference.barAlpha = fa;
-    sc.reference.barBeta = fb;
-    sc.reference.barLength = fl;
+    if (static_cast<int>(g.size()) != b.dim * b.dim)
+      fail(b.file, "'Reference/Gradient' needs " + std::to_string(b.dim * b.dim) + " entries (row-major)");
+    for (int a = 0; a < b.dim; ++a)
+      for (int c = 0; c < b.dim; ++c) r.H(a, c) = g[a * b.dim + c];
+  } else if (r.type == "Seed001 Bar") {
+    if (b.dim != 1) fail(b.file, "'Reference/Type' Seed001 Bar needs a 1D scene");
+    const auto& ml = b.pl.sublist("Material");
+    r.barAlpha = ml.get<double>("Field Alpha");
+    r.barBeta = ml.get<double>("Field Beta");
+    r.barLength = ml.get<double>("Field Length");
   }
-  if (sc.reference.type == "Hydrostatic Hencky" || sc.reference.type == "Uniform Stretch")
-    sc.reference.H = (sc.reference.stretch - 1.0) * Eigen::Matrix3d::Identity();
+  if (r.type == "Hydrostatic Hencky" || r.type == "Uniform Stretch") r.H = (r.stretch - 1.0) * Eigen::Matrix3d::Identity();
+}
 
-  // --- solver ---
-  const auto& so = pl.sublist("Solver");
-  SolverSettings& s = sc.solver;
+/// Solver/Arc Length: the controls, their order, the deflection probe; what continuation excludes.
+void readArcLength(SceneBuild& b, const Section& so) {
+  const Section al = so.sub("Arc Length");
+  SolverSettings& s = b.sc.solver;
+  auto& a = s.arc;
+  const std::string& file = b.file;
+  a.initial = al.get<double>("Initial Arc Length");
+  a.minimum = al.get<double>("Min Arc Length");
+  a.maximum = al.get<double>("Max Arc Length");
+  a.maxSteps = al.ranged<int>("Max Steps");
+  a.targetLoadFactor = al.get<double>("Target Load Factor");
+  a.targetDeflection = al.get<double>("Target Deflection");
+  a.deflectionProbe = al.get<std::string>("Deflection Probe");
+  a.deflectionComponent = al.choice<int>("Deflection Component");
+  if ((s.continuation == "Arc Length" || !a.deflectionProbe.empty()) && a.deflectionComponent >= b.dim)
+    fail(file, "'Solver/Arc Length/Deflection Component' must be a component of this " + std::to_string(b.dim) + "D scene (x, y or z)");
+  const std::string arcs = "; 'Solver/Arc Length' needs 0 < Min Arc Length <= Initial Arc Length <= Max Arc Length";
+  if (!(a.minimum > 0)) fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " is not positive" + arcs);
+  if (!(a.minimum <= a.initial))
+    fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " exceeds 'Initial Arc Length' = " + number(a.initial) + arcs);
+  if (!(a.initial <= a.maximum))
+    fail(file, "'Solver/Arc Length/Initial Arc Length' = " + number(a.initial) + " exceeds 'Max Arc Length' = " + number(a.maximum) + arcs);
+  al.ranged<double>("Target Load Factor");
+  al.ranged<double>("Target Deflection");
+  if (!a.deflectionProbe.empty()) {
+    bool found = false;
+    for (const auto& p : b.sc.probes) found |= p.name == a.deflectionProbe && p.quantity == "Displacement";
+    if (!found) fail(file, "'Solver/Arc Length/Deflection Probe' = '" + a.deflectionProbe + "' is not a Displacement probe under Probes");
+  }
+  if (a.targetDeflection > 0 && a.deflectionProbe.empty()) fail(file, "'Solver/Arc Length/Target Deflection' needs a 'Deflection Probe'");
+  if (s.continuation != "Arc Length") return;
+  if (s.method != "Newton") fail(file, "'Solver/Continuation' = Arc Length needs 'Solver/Method' = Newton");
+  if (b.problem.damage) fail(file, "'Solver/Continuation' = Arc Length does not support damage (bonds break between load steps); use Load Stepping");
+  if (b.problem.rotates()) fail(file, "'Solver/Continuation' = Arc Length does not support a 'Superposed Rotation' (the load is not linear in the load factor); use Load Stepping");
+}
+
+/// Solver: the nonlinear method, load stepping and continuation.
+void readSolver(SceneBuild& b) {
+  const Section so = b.section("Solver");
+  SolverSettings& s = b.sc.solver;
   s.method = so.get<std::string>("Method");
-  s.adrTolerance = so.get<double>("ADR Tolerance");
-  if (!(s.adrTolerance > 0 && s.adrTolerance < 1)) fail(file, "'Solver/ADR Tolerance' must be in (0, 1)");
-  s.adrMassSafety = so.get<double>("ADR Mass Safety");
-  if (!(s.adrMassSafety >= 1.0)) fail(file, "'Solver/ADR Mass Safety' must be at least 1 (the stability bound)");
-  s.adrMaxIterations = intIn(so, "Solver", "ADR Max Iterations", 1, INT_MAX, file);
-  s.loadSteps = intIn(so, "Solver", "Load Steps", 1, kMaxLoadSteps, file);
-  s.tolerance = so.get<double>("Tolerance");
-  if (!(s.tolerance > 0 && s.tolerance < 1)) fail(file, "'Solver/Tolerance' must be in (0, 1)");
-  s.maxIterations = intIn(so, "Solver", "Max Newton Iterations", 1, kMaxNewtonIterations, file);
+  s.adrTolerance = so.ranged<double>("ADR Tolerance");
+  s.adrMassSafety = so.ranged<double>("ADR Mass Safety");
+  s.adrMaxIterations = so.ranged<int>("ADR Max Iterations");
+  s.loadSteps = so.ranged<int>("Load Steps");
+  s.tolerance = so.ranged<double>("Tolerance");
+  s.maxIterations = so.ranged<int>("Max Newton Iterations");
   s.lineSearch = so.get<std::string>("Line Search");
   s.adaptive = so.get<bool>("Adaptive Steps");
-  s.easyIterations = intIn(so, "Solver", "Easy Iterations", 0, INT_MAX, file);
-  s.maxIncrement = so.get<double>("Max Increment");
-  if (!(s.maxIncrement > 0 && s.maxIncrement <= 1)) fail(file, "'Solver/Max Increment' must be in (0, 1]");
-  s.maxCutbacks = intIn(so, "Solver", "Max Cutbacks", 0, kMaxCutbacks, file);
+  s.easyIterations = so.ranged<int>("Easy Iterations");
+  s.maxIncrement = so.ranged<double>("Max Increment");
+  s.maxCutbacks = so.ranged<int>("Max Cutbacks");
   s.maxTotalSteps = so.get<int>("Max Total Steps");
   if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;  // <= 20 x kMaxLoadSteps: no overflow
   else if (s.maxTotalSteps < s.loadSteps || s.maxTotalSteps > kMaxTotalSteps)
-    fail(file, "'Solver/Max Total Steps' must be 0 (20 x Load Steps) or from 'Solver/Load Steps' (" + std::to_string(s.loadSteps) +
-                   ") to " + std::to_string(kMaxTotalSteps) + ", not " + std::to_string(s.maxTotalSteps));
-  s.minIncrement = so.get<double>("Min Increment");
-  if (!(s.minIncrement > 0 && s.minIncrement <= 1)) fail(file, "'Solver/Min Increment' must be in (0, 1]");
-  s.verbosity = intIn(so, "Solver", "Verbosity", 0, INT_MAX, file);
+    fail(b.file, "'Solver/Max Total Steps' must be 0 (20 x Load Steps) or from 'Solver/Load Steps' (" + std::to_string(s.loadSteps) +
+                     ") to " + std::to_string(kMaxTotalSteps) + ", not " + std::to_string(s.maxTotalSteps));
+  s.minIncrement = so.ranged<double>("Min Increment");
+  s.verbosity = so.ranged<int>("Verbosity");
   s.predictor = so.get<bool>("Predictor");
   s.stabilityCheck = so.get<bool>("Stability Check");
-  s.stagnationStop = intIn(so, "Solver", "Stagnation Stop", 0, INT_MAX, file);
+  s.stagnationStop = so.ranged<int>("Stagnation Stop");
   s.continuation = so.get<std::string>("Continuation");
-  {
-    const auto& al = so.sublist("Arc Length");
-    auto& a = s.arc;
-    a.initial = al.get<double>("Initial Arc Length");
-    a.minimum = al.get<double>("Min Arc Length");
-    a.maximum = al.get<double>("Max Arc Length");
-    a.maxSteps = intIn(al, "Solver/Arc Length", "Max Steps", 1, kMaxArcSteps, file);
-    a.targetLoadFactor = al.get<double>("Target Load Factor");
-    a.targetDeflection = al.get<double>("Target Deflection");
-    a.deflectionProbe = al.get<std::string>("Deflection Probe");
-    a.deflectionComponent = componentIndex(al.get<std::string>("Deflection Component"));
-    if ((s.continuation == "Arc Length" || !a.deflectionProbe.empty()) && (a.deflectionComponent < 0 || a.deflectionComponent >= dim))
-      fail(file, "'Solver/Arc Length/Deflection Component' must be a component of this " + std::to_string(dim) + "D scene (x, y or z)");
-    const std::string arcs = "; 'Solver/Arc Length' needs 0 < Min Arc Length <= Initial Arc Length <= Max Arc Length";
-    if (!(a.minimum > 0)) fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " is not positive" + arcs);
-    if (!(a.minimum <= a.initial))
-      fail(file, "'Solver/Arc Length/Min Arc Length' = " + number(a.minimum) + " exceeds 'Initial Arc Length' = " + number(a.initial) + arcs);
-    if (!(a.initial <= a.maximum))
-      fail(file, "'Solver/Arc Length/Initial Arc Length' = " + number(a.initial) + " exceeds 'Max Arc Length' = " + number(a.maximum) + arcs);
-    if (!(a.targetLoadFactor > 0)) fail(file, "'Solver/Arc Length/Target Load Factor' must be positive");
-    if (!(a.targetDeflection >= 0)) fail(file, "'Solver/Arc Length/Target Deflection' must be >= 0");
-    if (!a.deflectionProbe.empty()) {
-      bool found = false;
-      for (const auto& p : sc.probes) found |= p.name == a.deflectionProbe && p.quantity == "Displacement";
-      if (!found) fail(file, "'Solver/Arc Length/Deflection Probe' = '" + a.deflectionProbe + "' is not a Displacement probe under Probes");
-    }
-    if (a.targetDeflection > 0 && a.deflectionProbe.empty())
-      fail(file, "'Solver/Arc Length/Target Deflection' needs a 'Deflection Probe'");
-    if (s.continuation == "Arc Length") {
-      if (s.method != "Newton") fail(file, "'Solver/Continuation' = Arc Length needs 'Solver/Method' = Newton");
-      if (problem->damage) fail(file, "'Solver/Continuation' = Arc Length does not support damage (bonds break between load steps); use Load Stepping");
-      if (problem->rotates()) fail(file, "'Solver/Continuation' = Arc Length does not support a 'Superposed Rotation' (the load is not linear in the load factor); use Load Stepping");
-    }
-  }
-  s.floorFactor = so.get<double>("Round-off Floor Factor");
-  if (!(s.floorFactor >= 0)) fail(file, "'Solver/Round-off Floor Factor' must be >= 0");
-  s.linearSolverName = so.get<std::string>("Linear Solver Preset");
-  if (s.linearSolverName == "custom") {
-    if (!so.isSublist("Linear Solver") || so.sublist("Linear Solver").numParams() == 0)
-      fail(file, "'Solver/Linear Solver Preset' is custom but 'Solver/Linear Solver' is empty");
-    s.linearSolver = Teuchos::rcp(new ParameterList(so.sublist("Linear Solver")));
-  } else {
-    if (so.isSublist("Linear Solver") && so.sublist("Linear Solver").numParams() > 0)
-      fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + s.linearSolverName + "'; set the preset to custom");
-    // Names only (no paths): the presets are the files of presetDir.
-    const auto presets = presetNames(presetDir);
-    if (std::find(presets.begin(), presets.end(), s.linearSolverName) == presets.end()) {
-      auto names = presets;
-      names.push_back("custom");
-      fail(file, "'Solver/Linear Solver Preset' = " + quote(s.linearSolverName) + " is not a preset name (" +
-                     (presets.empty() ? "there are no presets in " + presetDir + ", so only custom is possible" : "it must be " + orList(names)) + ")");
-    }
-    const std::string presetFile = presetDir + "/" + s.linearSolverName + ".xml";
-    try {
-      s.linearSolver = Teuchos::getParametersFromXmlFile(presetFile);
-    } catch (const std::exception& e) {
-      fail(presetFile, "cannot read the solver preset: " + teuchosReason(e.what()));
-    }
-  }
+  readArcLength(b, so);
+  s.floorFactor = so.ranged<double>("Round-off Floor Factor");
+}
 
-  // A preset may name the Jacobian and the preconditioner matrix it is meant for; the scene's
-  // own keys win unless they say Preset.
+/// The Stratimikos list: a preset of presetDir (names only, no paths) or the scene's own (custom).
+Teuchos::RCP<ParameterList> linearSolverList(const SceneBuild& b, const Section& so, const std::string& name) {
+  const std::string& file = b.file;
+  const bool given = so.list.isSublist("Linear Solver") && so.list.sublist("Linear Solver").numParams() > 0;
+  if (name == "custom") {
+    if (!given) fail(file, "'Solver/Linear Solver Preset' is custom but 'Solver/Linear Solver' is empty");
+    return Teuchos::rcp(new ParameterList(so.list.sublist("Linear Solver")));
+  }
+  if (given) fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + name + "'; set the preset to custom");
+  const auto presets = presetNames(b.presetDir);
+  if (std::find(presets.begin(), presets.end(), name) == presets.end()) {
+    auto names = presets;
+    names.push_back("custom");
+    fail(file, "'Solver/Linear Solver Preset' = " + quote(name) + " is not a preset name (" +
+                   (presets.empty() ? "there are no presets in " + b.presetDir + ", so only custom is possible" : "it must be " + orList(names)) + ")");
+  }
+  const std::string presetFile = b.presetDir + "/" + name + ".xml";
+  try {
+    return Teuchos::getParametersFromXmlFile(presetFile);
+  } catch (const std::exception& e) {
+    fail(presetFile, "cannot read the solver preset: " + teuchosReason(e.what()));
+  }
+}
+
+/// Solver/Linear Solver Preset and the Jacobian: a preset may name the Jacobian and the
+/// preconditioner matrix it is meant for; the scene's own keys win unless they say Preset.
+void readLinearSolver(SceneBuild& b) {
+  const Section so = b.section("Solver");
+  SolverSettings& s = b.sc.solver;
+  const std::string& file = b.file;
+  s.linearSolverName = so.get<std::string>("Linear Solver Preset");
+  s.linearSolver = linearSolverList(b, so, s.linearSolverName);
   std::string presetJacobian = "Assembled", presetPrecMatrix = "Neighbours";
   for (auto [key, target] : {std::make_pair("Jacobian", &presetJacobian), std::make_pair("Preconditioner Matrix", &presetPrecMatrix)}) {
     if (!s.linearSolver->isParameter(key)) continue;
@@ -1373,8 +1558,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   if (s.preconditionerMatrix == "Preset") s.preconditionerMatrix = presetPrecMatrix;
   if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours")
     fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
-  s.jfnkLambda = so.get<double>("Jacobian-Free Perturbation");
-  if (!(s.jfnkLambda > 0 && s.jfnkLambda < 1e-2)) fail(file, "'Solver/Jacobian-Free Perturbation' must be in (0, 0.01)");
+  s.jfnkLambda = so.ranged<double>("Jacobian-Free Perturbation");
   if (s.jacobian != "Assembled" && s.lineSearch.find("Trust Region") != std::string::npos)
     fail(file, "'Solver/Line Search' = " + s.lineSearch + " needs the transpose of the Jacobian; set 'Solver/Jacobian' = Assembled");
   if (s.jacobian != "Assembled" && s.continuation == "Arc Length")
@@ -1382,24 +1566,69 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   if (s.jacobian != "Assembled" && s.linearSolver->get<std::string>("Linear Solver Type", "Belos") != "Belos")
     fail(file, "'Solver/Jacobian' = " + s.jacobian + " needs a Krylov solver (Linear Solver Type = Belos); the preset '" +
                    s.linearSolverName + "' is a direct solver, which needs the assembled matrix");
-
   // Damage makes the tangent unsymmetric: conjugate gradients would silently misbehave.
-  if (problem->damage && s.linearSolver->get<std::string>("Linear Solver Type", "") == "Belos") {
+  if (b.problem.damage && s.linearSolver->get<std::string>("Linear Solver Type", "") == "Belos") {
     const auto& belos = s.linearSolver->sublist("Linear Solver Types").sublist("Belos");
     const std::string st = belos.isParameter("Solver Type") ? belos.get<std::string>("Solver Type") : "";
     if (st.find("CG") != std::string::npos)
       fail(file, "damage makes the tangent unsymmetric, but the linear solver is Belos '" + st +
                      "' (conjugate gradients need a symmetric matrix); use a GMRES preset such as gmres-ilu");
   }
+}
 
-  // --- output ---
-  sc.output.vtk = pl.sublist("Output").get<bool>("VTK");
-  sc.output.format = pl.sublist("Output").get<std::string>("Format");
-  if (sc.output.format != "VTU" && !exodusAvailable())
-    fail(file, "'Output/Format' = " + sc.output.format + ", but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
-  sc.output.plots = pl.sublist("Output").get<bool>("Plots");
+void readOutput(SceneBuild& b) {
+  const Section o = b.section("Output");
+  OutputSettings& out = b.sc.output;
+  out.vtk = o.get<bool>("VTK");
+  out.format = o.get<std::string>("Format");
+  if (out.format != "VTU" && !exodusAvailable())
+    fail(b.file, "'Output/Format' = " + out.format + ", but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
+  out.plots = o.get<bool>("Plots");
+}
 
+/// The sublist functions, in the order a scene is read (later ones use what earlier ones built:
+/// the material and particles, then the regions the conditions, loads and probes name). A new
+/// sublist is one more line here.
+using SceneStep = void (*)(SceneBuild&);
+const std::vector<SceneStep>& sceneSteps() {
+  static const std::vector<SceneStep> steps{
+      readMaterial, readDiscretization, readStabilization, readModulusField, readControls,
+      readDamage,   readRegions,        readBoundaryConditions, readLoads,   readRotation,
+      readProbes,   readReference,      readSolver,        readLinearSolver, readOutput};
+  return steps;
+}
+
+/// The checks on the whole list before any sublist is read: keys and types against the schema,
+/// the dimension, the given enumerated values and vector lengths; then the defaults, all finite.
+int checkScene(ParameterList& pl, const ParameterList& schema, const std::string& file) {
+  checkAgainst(pl, schema, "", file);
+  const auto& given = pl.sublist("Discretization");
+  const int dim = given.isParameter("Dimension") ? given.get<int>("Dimension") : schema.sublist("Discretization").get<int>("Dimension");
+  if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
+  checkGivenValues(pl, dim, file);
+  fillDefaults(pl, schema);
+  checkFinite(pl, file);
+  return dim;
+}
+
+}  // namespace
+
+Teuchos::RCP<const ParameterList> sceneSchema() {
+  static auto s = buildSchema();
+  return s;
+}
+
+Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir) {
+  const auto schema = sceneSchema();
+  const int dim = checkScene(pl, *schema, file);
+  Scene sc;
+  sc.file = file;
+  sc.title = pl.get<std::string>("Title");
+  auto problem = std::make_shared<ProblemSpec>();
+  SceneBuild build{sc, *problem, pl, *schema, file, presetDir, dim, ExodusMesh()};
+  for (const SceneStep step : sceneSteps()) step(build);
   sc.problem = problem;
+  const SolverSettings& s = sc.solver;
   sc.resolved = Teuchos::rcp(new ParameterList(pl));
   if (s.linearSolverName != "custom") sc.resolved->sublist("Solver").sublist("Linear Solver").setParameters(*s.linearSolver);
   sc.resolved->sublist("Solver").set("Jacobian", s.jacobian);

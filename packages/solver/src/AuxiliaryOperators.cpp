@@ -304,6 +304,7 @@ class ShortHorizonSource final : public AuxiliarySource {
   void rebuild(long long damage) {
     const PeridynamicEvaluator& ev = *ev_;
     auto P = std::make_shared<ProblemSpec>(ev.problem());
+    P->stab = ev.problem().stabilizationSpec();  // the body's micromodulus, not the short horizon's
     P->disc.horizon = factor_ * P->disc.dx;
     buildFamilies(P->disc);
     auto aux = rcp(new PeridynamicEvaluator(ev.comm(), P));

@@ -177,65 +177,70 @@ NewtonSolver::NewtonSolver(Teuchos::RCP<const Thyra::ModelEvaluator<double>> mod
 NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options)
     : NewtonSolver(evaluator, Teuchos::rcp(new EvaluatorResidualScale(evaluator)), options) {}
 
-NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
-  NewtonResult result;
+Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& options) {
   auto params = Teuchos::rcp(new Teuchos::ParameterList("NOX"));
-  if (options_.lineSearch == "Trust Region") {
+  if (options.lineSearch == "Trust Region") {
     params->set("Nonlinear Solver", "Trust Region Based");
-  } else if (options_.lineSearch == "Inexact Trust Region") {
+  } else if (options.lineSearch == "Inexact Trust Region") {
     params->set("Nonlinear Solver", "Inexact Trust Region Based");
   } else {
     params->set("Nonlinear Solver", "Line Search Based");
-    params->sublist("Line Search").set("Method", options_.lineSearch);
+    params->sublist("Line Search").set("Method", options.lineSearch);
   }
   auto& dir = params->sublist("Direction");
   dir.set("Method", "Newton");
   auto& newton = dir.sublist("Newton");
   newton.set("Forcing Term Method", "Constant");
-  newton.sublist("Linear Solver").set("Tolerance", options_.linearTolerance);
+  newton.sublist("Linear Solver").set("Tolerance", options.linearTolerance);
   newton.set("Rescue Bad Newton Solve", true);
   auto& print = params->sublist("Printing");
-  print.set("Output Information", options_.verbosity > 0
+  print.set("Output Information", options.verbosity > 0
                                       ? NOX::Utils::Error + NOX::Utils::Warning + NOX::Utils::OuterIteration +
                                             NOX::Utils::LinearSolverDetails
                                       : NOX::Utils::Error);
   print.set("Output Processor", 0);
+  return params;
+}
 
-  auto x0 = x.clone_v();
-  NOX::Thyra::Vector guess(x0);
+Teuchos::RCP<Teuchos::ParameterList> newtonParametersWithStatusTests(const NewtonOptions& options, double relativeTolerance,
+                                                                    double roundoff) {
+  auto params = newtonParameters(options);
+  auto& tests = params->sublist("Status Tests");
+  tests.set("Test Type", "Combo");
+  tests.set("Combo Type", "OR");
+  tests.set("Number of Tests", 4);
+  tests.sublist("Test 0").set("Test Type", "RelativeNormF");
+  tests.sublist("Test 0").set("Tolerance", relativeTolerance);
+  tests.sublist("Test 1").set("Test Type", "NormF");
+  tests.sublist("Test 1").set("Tolerance", options.floorFactor * roundoff);
+  tests.sublist("Test 2").set("Test Type", "MaxIters");
+  tests.sublist("Test 2").set("Maximum Iterations", options.maxIterations);
+  tests.sublist("Test 3").set("Test Type", "FiniteValue");
+  return params;
+}
+
+Teuchos::RCP<CountingGroup> countingGroup(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>& model,
+                                          const Thyra::VectorBase<double>& x, double linearTolerance) {
+  NOX::Thyra::Vector guess(x.clone_v());
   Teuchos::RCP<CountingGroup> group;
-
-  const NewtonStatusTests tests =
-      newtonStatusTests(scale_, options_.tolerance, options_.maxIterations, options_.floorFactor, options_.stagnationStop);
-  const auto& residualTest = tests.residual;
-  const auto& maxIters = tests.maxIters;
-  const auto& finite = tests.finite;
-  const auto& combo = tests.combo;
-
-  NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
-  try {
-    if (!model_->createOutArgs().supports(Thyra::ModelEvaluatorBase::OUT_ARG_W_prec)) {
-      group = Teuchos::rcp(new CountingGroup(guess, model_));
-    } else {
-      // A model that builds its own preconditioner (perinox's matrix-free W_op, the analytic
-      // product or a finite difference of f, preconditioned from an assembled matrix).
-      group = Teuchos::rcp(new CountingGroup(guess, model_, model_->create_W_op(), model_->get_W_factory(),
-                                             model_->create_W_prec(), Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
-    }
-    group->setTolerance(options_.linearTolerance);
-    group->computeF();  // the inexact trust-region solver asks for |F| before computing it
-    auto solver = NOX::Solver::buildSolver(group, combo, params);
-    status = solver->solve();
-    const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());
-    Thyra::copy(sol.getThyraVector(), Teuchos::ptrFromRef(x));
-    result.iterations = solver->getNumIterations();
-  } catch (const EvaluationError& e) {
-    result.failure = std::string("model evaluation failed: ") + e.what();
-  } catch (const std::exception& e) {
-    result.failure = linearSolverFailure(e);
-  } catch (const char* e) {  // NOX throws string literals in places
-    result.failure = std::string("nonlinear solver error: ") + e;
+  if (!model->createOutArgs().supports(Thyra::ModelEvaluatorBase::OUT_ARG_W_prec)) {
+    group = Teuchos::rcp(new CountingGroup(guess, model));
+  } else {
+    // A model that builds its own preconditioner (perinox's matrix-free W_op, the analytic
+    // product or a finite difference of f, preconditioned from an assembled matrix).
+    group = Teuchos::rcp(new CountingGroup(guess, model, model->create_W_op(), model->get_W_factory(),
+                                           model->create_W_prec(), Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>>()));
   }
+  group->setTolerance(linearTolerance);
+  return group;
+}
+
+NewtonResult newtonResult(const NewtonStatusTests& tests, const CountingGroup* group, NOX::StatusTest::StatusType status,
+                          int iterations, const std::string& failure, int maxIterations) {
+  NewtonResult result;
+  const auto& residualTest = tests.residual;
+  result.iterations = iterations;
+  result.failure = failure;
   result.residuals = residualTest->history();
   result.reactionNormalised = residualTest->reactionNormalised();
   result.normaliser = residualTest->scale();
@@ -243,40 +248,94 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   result.floorNormalised = residualTest->floorNormalised();
   result.converged = result.failure.empty() && status == NOX::StatusTest::Converged &&
                      residualTest->getStatus() == NOX::StatusTest::Converged;
-  result.linearFailures = group.is_null() ? 0 : group->failures();
-  if (!group.is_null()) result.linear = group->counts();
+  result.linearFailures = group ? group->failures() : 0;
+  if (group) result.linear = group->counts();
   result.linear.failures = result.linearFailures;
   // When NOX threw, getNumIterations was never read: the residual history (one entry per
   // iterate) counts the iterations it ran.
   result.work = result.iterations > 0 ? result.iterations
                                       : std::max<long long>(0, static_cast<long long>(result.residuals.size()) - 1);
+  if (result.converged || !result.failure.empty()) return result;
+  // The most specific cause first: a linear solver that did not solve the Newton systems makes
+  // every later symptom (stagnation, iteration limit) a consequence.
+  std::ostringstream s;
+  const double last = result.residuals.empty() ? NAN : result.residuals.back();
+  const std::string stagnation =
+      !residualTest->stagnation().empty() ? residualTest->stagnation() : stagnationDiagnosis(result.residuals, 5);
+  if (tests.finite->getStatus() == NOX::StatusTest::Failed)
+    s << "the residual became NaN or infinite";
+  else if (result.linearFailures > 0)
+    s << "the linear solver did not converge in " << result.linearFailures
+      << " Newton iteration(s) (Krylov iteration limit or breakdown; last achieved relative residual "
+      << group->lastAchieved() << " after " << group->lastIterations()
+      << " iterations): the Newton directions were inexact (last normalised residual " << last << ")";
+  else if (!stagnation.empty())
+    s << stagnation;
+  else if (tests.maxIters->getStatus() == NOX::StatusTest::Failed)
+    s << "no convergence in " << maxIterations << " Newton iterations (last normalised residual " << last << ")";
+  else
+    s << "the nonlinear solver stopped without convergence (line search or linear solve failed; last "
+         "normalised residual " << last << ")";
+  result.failure = s.str();
+  return result;
+}
+
+std::string noxFailure() {
+  try {
+    throw;
+  } catch (const EvaluationError& e) {
+    return std::string("model evaluation failed: ") + e.what();
+  } catch (const std::exception& e) {
+    return linearSolverFailure(e);
+  } catch (const char* e) {
+    return std::string("nonlinear solver error: ") + e;
+  }
+}
+
+NewtonResult solveNox(NOX::Solver::Generic& solver, const NewtonStatusTests& tests, const CountingGroup* group,
+                      Thyra::VectorBase<double>& x, int maxIterations) {
+  NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
+  int iterations = 0;
+  std::string failure;
+  try {
+    status = solver.solve();
+    const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver.getSolutionGroup().getX());
+    Thyra::copy(sol.getThyraVector(), Teuchos::ptrFromRef(x));
+    iterations = solver.getNumIterations();
+  } catch (const std::exception&) {
+    failure = noxFailure();
+  } catch (const char*) {
+    failure = noxFailure();
+  }
+  return newtonResult(tests, group, status, iterations, failure, maxIterations);
+}
+
+NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
+  const auto params = newtonParameters(options_);
+  const NewtonStatusTests tests =
+      newtonStatusTests(scale_, options_.tolerance, options_.maxIterations, options_.floorFactor, options_.stagnationStop);
+  Teuchos::RCP<CountingGroup> group;
+  NOX::StatusTest::StatusType status = NOX::StatusTest::Failed;
+  int iterations = 0;
+  std::string failure;
+  try {
+    group = countingGroup(model_, x, options_.linearTolerance);
+    group->computeF();  // the inexact trust-region solver asks for |F| before computing it
+    auto solver = NOX::Solver::buildSolver(group, tests.combo, params);
+    status = solver->solve();
+    const auto& sol = dynamic_cast<const NOX::Thyra::Vector&>(solver->getSolutionGroup().getX());
+    Thyra::copy(sol.getThyraVector(), Teuchos::ptrFromRef(x));
+    iterations = solver->getNumIterations();
+  } catch (const std::exception&) {
+    failure = noxFailure();
+  } catch (const char*) {  // NOX throws string literals in places
+    failure = noxFailure();
+  }
+  const NewtonResult result = newtonResult(tests, group.get(), status, iterations, failure, options_.maxIterations);
   totalNewton_ += result.work;
   totalLinear_.solves += result.linear.solves;
   totalLinear_.krylovIterations += result.linear.krylovIterations;
   totalLinear_.failures += result.linear.failures;
-  if (!result.converged && result.failure.empty()) {
-    // The most specific cause first: a linear solver that did not solve the Newton systems
-    // makes every later symptom (stagnation, iteration limit) a consequence.
-    std::ostringstream s;
-    const double last = result.residuals.empty() ? NAN : result.residuals.back();
-    const std::string stagnation =
-        !residualTest->stagnation().empty() ? residualTest->stagnation() : stagnationDiagnosis(result.residuals, 5);
-    if (finite->getStatus() == NOX::StatusTest::Failed)
-      s << "the residual became NaN or infinite";
-    else if (result.linearFailures > 0)
-      s << "the linear solver did not converge in " << result.linearFailures
-        << " Newton iteration(s) (Krylov iteration limit or breakdown; last achieved relative residual "
-        << group->lastAchieved() << " after " << group->lastIterations()
-        << " iterations): the Newton directions were inexact (last normalised residual " << last << ")";
-    else if (!stagnation.empty())
-      s << stagnation;
-    else if (maxIters->getStatus() == NOX::StatusTest::Failed)
-      s << "no convergence in " << options_.maxIterations << " Newton iterations (last normalised residual " << last << ")";
-    else
-      s << "the nonlinear solver stopped without convergence (line search or linear solve failed; last "
-           "normalised residual " << last << ")";
-    result.failure = s.str();
-  }
   return result;
 }
 

@@ -270,112 +270,40 @@ NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& l
   return bestR;
 }
 
+// One load step after another until the load factor reaches 1 or a step fails for good: each
+// step is solved with cut-backs (solveWithCutbacks), a step that cannot be converged may be
+// rescued by a stall break (breakAtStall), a converged one is broken and re-equilibrated by the
+// damage policy (breakAfterConvergence), vetted by the observers and accepted (accept).
 bool LoadStepper::run() {
-  const int N = options_.loadSteps;
-  double& lambda = state_.loadFactor;
-  double& increment = state_.increment;
-  double& lastIncrement = state_.lastIncrement;
-  int& step = state_.step;
   auto x = xConverged_->clone_v();
   Teuchos::RCP<Thyra::VectorBase<double>> firstTangent;
   failure_.clear();
-  bool ok = true;
-  while (lambda < 1.0 - 1e-12) {
-    if (step >= options_.maxTotalSteps) {
-      ok = false;
+  while (state_.loadFactor < 1.0 - 1e-12) {
+    if (state_.step >= options_.maxTotalSteps) {
       std::ostringstream s;
       s << "reached '" << options_.keyPrefix << "Max Total Steps' = " << options_.maxTotalSteps << " at load factor "
-        << lambda << " (the load increment had fallen to " << increment << "): the solver can no longer advance the load";
+        << state_.loadFactor << " (the load increment had fallen to " << state_.increment
+        << "): the solver can no longer advance the load";
       failure_ = s.str();
       break;
     }
-    ++step;
+    ++state_.step;
     const double tStep = now();
     stepWork_ = 0;
     stepLinear_ = LinearSolveCounts();
     StepRecord rec;
-    rec.step = step;
-    NewtonResult nr;
-    auto solveOnce = [&](Thyra::VectorBase<double>& xs) { return counted(solve_, xs); };
-    auto account = [&](StepRecord& r) {
-      r.newtonIterationsAll = stepWork_;
-      r.linearSolves = stepLinear_.solves;
-      r.krylovIterations = stepLinear_.krylovIterations;
-      r.linearFailures = stepLinear_.failures;
-    };
-    int cut = 0;
-    const double stepIncrement = increment;
+    rec.step = state_.step;
+    const double stepIncrement = state_.increment;
     // The first step has no increment to extrapolate. With prescribed motion, starting Newton from
     // the unloaded body puts the whole prescribed jump into the bonds next to the loaded
     // particles; the tangent predictor moves the body with the load first: one linear solve.
-    if (options_.predictor && options_.tangentPredictor && lastIncrement == 0 && step == 1) {
-      firstTangent = xConverged_->clone_v();
-      const std::string why = tangent(*xConverged_, *firstTangent);
-      if (!why.empty()) {
-        firstTangent = Teuchos::null;
-        note("  step 1: no tangent predictor (" + why + "); Newton starts from the unloaded body");
-      }
-    }
-    for (;;) {
-      const double target = std::min(1.0, lambda + increment);
-      setLoadFactor(target);
-      Thyra::copy(*xConverged_, x.ptr());
-      if (options_.predictor && lastIncrement > 0) {
-        // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
-        const double a = (target - lambda) / lastIncrement;
-        Thyra::V_StVpStV(x.ptr(), 1.0 + a, *xConverged_, -a, *xPrevious_);
-      } else if (firstTangent && step == 1) {
-        Thyra::Vp_StV(x.ptr(), target - lambda, *firstTangent);
-      }
-      nr = solveOnce(*x);
-      rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
-      if (nr.converged) {
-        lambda = target;
-        break;
-      }
-      Thyra::copy(*xConverged_, x.ptr());
-      if (cut >= options_.maxCutbacks) break;
-      if (0.5 * increment < options_.minIncrement / N) {
-        nr.failure += "; the load increment would fall below '" + options_.keyPrefix + "Min Increment'";
-        break;
-      }
-      ++cut;
-      increment *= 0.5;
-      rec.residuals.clear();
-      std::ostringstream s;
-      s << "  step " << step << ": " << nr.failure << "; cutting the load increment to " << increment;
-      note(s.str());
-    }
-    // A step that cannot be converged even at the smallest increment (softening bonds snap back
-    // under displacement control: no equilibrium at a larger load with all of them intact): the
-    // damage policy breaks at the last converged state, re-equilibrate at the same load, go on.
-    // The step is recorded at the unchanged load factor.
-    if (!nr.converged && damage_ && damage_->breakOnStalls && state_.stallBreaks < damage_->maxStallBreaks) {
-      Thyra::copy(*xConverged_, x.ptr());
-      setLoadFactor(lambda);
-      const auto rep = damage_->breakOnStall(*x, nr.failure);
-      if (rep.brokenBonds > 0 || !rep.detached.empty()) {
-        ++state_.stallBreaks;
-        rec.stallBrokenBonds = rep.brokenBonds;
-        rec.stallStretch = rep.maxStretch;
-        rec.brokenBonds += rep.brokenBonds;
-        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
-        rec.fragmentParticles += rep.fragmentParticles;
-        note("  step " + std::to_string(step) + ": " + nr.failure);
-        if (!rep.note.empty()) note(rep.note);
-        const std::string why = nr.failure;
-        nr = reequilibrate(*x, lambda, rec);
-        rec.residuals = nr.residuals;
-        if (!nr.converged) nr.failure = "re-equilibration after the stall break (" + why + ") failed: " + nr.failure;
-        increment = stepIncrement;
-      } else {
-        nr.failure += "; " + damage_->nothingToBreak();
-      }
-    } else if (!nr.converged && damage_ && damage_->breakOnStalls) {
-      nr.failure += "; " + damage_->stallLimitReached();
-    }
+    if (options_.predictor && options_.tangentPredictor && state_.lastIncrement == 0 && state_.step == 1)
+      firstTangent = firstStepTangent();
+    int cut = 0;
+    NewtonResult nr = solveWithCutbacks(*x, rec, cut, firstTangent.get());
+    if (!nr.converged && damage_ && damage_->breakOnStalls) breakAtStall(*x, rec, nr, stepIncrement);
     rec.cutbacks = cut;
-    rec.loadFactor = nr.converged ? lambda : std::min(1.0, lambda + increment);
+    rec.loadFactor = nr.converged ? state_.loadFactor : std::min(1.0, state_.loadFactor + state_.increment);
     rec.newtonIterations = nr.iterations;
     rec.reactionNormalised = nr.reactionNormalised;
     rec.atRoundoffFloor = nr.atRoundoffFloor;
@@ -385,81 +313,176 @@ bool LoadStepper::run() {
     account(rec);
     records_.push_back(rec);
     if (!nr.converged) {
-      ok = false;
       std::ostringstream s;
-      s << "load step " << step << " (load factor " << rec.loadFactor << ") failed after " << cut
+      s << "load step " << state_.step << " (load factor " << rec.loadFactor << ") failed after " << cut
         << " cut-back(s): " << nr.failure;
       failure_ = s.str();
-      setLoadFactor(lambda);
+      setLoadFactor(state_.loadFactor);
       break;
     }
-    // Damage (seed 000, Fig. 8): nothing breaks inside the solve; after convergence, break what
-    // the criterion says, re-equilibrate at the same load, and repeat until nothing breaks. Only
-    // then does the load grow.
-    if (damage_) {
-      for (;;) {
-        const auto rep = damage_->breakAfterStep(*x);
-        rec.brokenBonds += rep.brokenBonds;
-        rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
-        rec.fragmentParticles += rep.fragmentParticles;
-        if (rep.brokenBonds == 0 && rep.detached.empty()) break;
-        if (rec.breakRounds >= damage_->maxBreakRounds) {
-          nr.converged = false;
-          nr.failure = "bonds were still breaking after " + std::to_string(rec.breakRounds) + " re-equilibrations";
-          break;
-        }
-        ++rec.breakRounds;
-        const NewtonResult re = reequilibrate(*x, lambda, rec);
-        rec.newtonIterations += re.iterations;
-        rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
-        if (!re.converged) {
-          nr = re;
-          nr.failure = "re-equilibration after breaking " + std::to_string(rep.brokenBonds) + " bond(s) failed: " + re.failure;
-          break;
-        }
-      }
-      if (!nr.converged) {
-        account(rec);
-        records_.back() = rec;
-        ok = false;
-        failure_ = "load step " + std::to_string(step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
-        break;
-      }
-      rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
-      rec.elapsed = now() - tStep;
-      account(rec);
-      records_.back() = rec;
-      if (rec.brokenBonds > 0 || !rec.detached.empty()) note(damage_->describeStep(rec));
-    }
+    if (damage_ && !breakAfterConvergence(*x, rec, nr, tStep)) break;
     const double previous = records_.size() > 1 ? records_[records_.size() - 2].loadFactor : 0.0;
-    {
-      const StepInfo info{rec, nr, *x, lambda};
-      std::string vetoed;
-      for (auto* o : observers_)
-        if (vetoed.empty()) vetoed = o->vet(info, previous);
-      if (!vetoed.empty()) {
-        ok = false;
-        failure_ = vetoed;
-        lambda = previous;
-        setLoadFactor(lambda);
-        break;
-      }
-    }
-    Thyra::copy(*xConverged_, xPrevious_.ptr());
-    Thyra::copy(*x, xConverged_.ptr());
-    path_.push_back(lambda);
-    lastIncrement = rec.loadFactor - previous;
-    // After easy convergence at a reduced increment, grow back toward the nominal increment.
-    if (options_.adaptive) {
-      if (nr.iterations <= options_.easyIterations) increment = std::min(options_.maxIncrement, 1.5 * increment);
-    } else if (increment < 1.0 / N && nr.iterations <= 6) {
-      increment = std::min(1.0 / N, 2 * increment);
-    }
-    const StepInfo info{rec, nr, *xConverged_, lambda};
-    for (auto* o : observers_) o->accepted(info);
+    if (!vetted(rec, nr, *x, previous)) break;
+    accept(*x, rec, nr, previous);
   }
-  setLoadFactor(lambda);  // the state kept is the last converged one
-  return ok;
+  setLoadFactor(state_.loadFactor);  // the state kept is the last converged one
+  return failure_.empty();
+}
+
+void LoadStepper::account(StepRecord& rec) const {
+  rec.newtonIterationsAll = stepWork_;
+  rec.linearSolves = stepLinear_.solves;
+  rec.krylovIterations = stepLinear_.krylovIterations;
+  rec.linearFailures = stepLinear_.failures;
+}
+
+Teuchos::RCP<Thyra::VectorBase<double>> LoadStepper::firstStepTangent() {
+  auto z = xConverged_->clone_v();
+  const std::string why = tangent(*xConverged_, *z);
+  if (why.empty()) return z;
+  note("  step 1: no tangent predictor (" + why + "); Newton starts from the unloaded body");
+  return Teuchos::null;
+}
+
+// The step's solve from the predicted state; a failed solve is retried with half the increment,
+// up to Max Cutbacks times and down to Min Increment. On success the load factor is the target.
+NewtonResult LoadStepper::solveWithCutbacks(Thyra::VectorBase<double>& x, StepRecord& rec, int& cut,
+                                            const Thyra::VectorBase<double>* firstTangent) {
+  double& lambda = state_.loadFactor;
+  double& increment = state_.increment;
+  const double lastIncrement = state_.lastIncrement;
+  NewtonResult nr;
+  for (;;) {
+    const double target = std::min(1.0, lambda + increment);
+    setLoadFactor(target);
+    Thyra::copy(*xConverged_, Teuchos::ptrFromRef(x));
+    if (options_.predictor && lastIncrement > 0) {
+      // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
+      const double a = (target - lambda) / lastIncrement;
+      Thyra::V_StVpStV(Teuchos::ptrFromRef(x), 1.0 + a, *xConverged_, -a, *xPrevious_);
+    } else if (firstTangent && state_.step == 1) {
+      Thyra::Vp_StV(Teuchos::ptrFromRef(x), target - lambda, *firstTangent);
+    }
+    nr = counted(solve_, x);
+    rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
+    if (nr.converged) {
+      lambda = target;
+      return nr;
+    }
+    Thyra::copy(*xConverged_, Teuchos::ptrFromRef(x));
+    if (cut >= options_.maxCutbacks) return nr;
+    if (0.5 * increment < options_.minIncrement / options_.loadSteps) {
+      nr.failure += "; the load increment would fall below '" + options_.keyPrefix + "Min Increment'";
+      return nr;
+    }
+    ++cut;
+    increment *= 0.5;
+    rec.residuals.clear();
+    std::ostringstream s;
+    s << "  step " << state_.step << ": " << nr.failure << "; cutting the load increment to " << increment;
+    note(s.str());
+  }
+}
+
+// A step that cannot be converged even at the smallest increment (softening bonds snap back
+// under displacement control: no equilibrium at a larger load with all of them intact): the
+// damage policy breaks at the last converged state, re-equilibrate at the same load, go on.
+// The step is recorded at the unchanged load factor.
+void LoadStepper::breakAtStall(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double stepIncrement) {
+  if (state_.stallBreaks >= damage_->maxStallBreaks) {
+    nr.failure += "; " + damage_->stallLimitReached();
+    return;
+  }
+  Thyra::copy(*xConverged_, Teuchos::ptrFromRef(x));
+  setLoadFactor(state_.loadFactor);
+  const auto rep = damage_->breakOnStall(x, nr.failure);
+  if (rep.brokenBonds == 0 && rep.detached.empty()) {
+    nr.failure += "; " + damage_->nothingToBreak();
+    return;
+  }
+  ++state_.stallBreaks;
+  rec.stallBrokenBonds = rep.brokenBonds;
+  rec.stallStretch = rep.maxStretch;
+  rec.brokenBonds += rep.brokenBonds;
+  rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+  rec.fragmentParticles += rep.fragmentParticles;
+  note("  step " + std::to_string(state_.step) + ": " + nr.failure);
+  if (!rep.note.empty()) note(rep.note);
+  const std::string why = nr.failure;
+  nr = reequilibrate(x, state_.loadFactor, rec);
+  rec.residuals = nr.residuals;
+  if (!nr.converged) nr.failure = "re-equilibration after the stall break (" + why + ") failed: " + nr.failure;
+  state_.increment = stepIncrement;
+}
+
+// Damage (seed 000, Fig. 8): nothing breaks inside the solve; after convergence, break what the
+// criterion says, re-equilibrate at the same load, and repeat until nothing breaks. Only then
+// does the load grow. False (failure_ set, the step's record updated) when that fails.
+bool LoadStepper::breakAfterConvergence(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double tStep) {
+  double& lambda = state_.loadFactor;
+  for (;;) {
+    const auto rep = damage_->breakAfterStep(x);
+    rec.brokenBonds += rep.brokenBonds;
+    rec.detached.insert(rec.detached.end(), rep.detached.begin(), rep.detached.end());
+    rec.fragmentParticles += rep.fragmentParticles;
+    if (rep.brokenBonds == 0 && rep.detached.empty()) break;
+    if (rec.breakRounds >= damage_->maxBreakRounds) {
+      nr.converged = false;
+      nr.failure = "bonds were still breaking after " + std::to_string(rec.breakRounds) + " re-equilibrations";
+      break;
+    }
+    ++rec.breakRounds;
+    const NewtonResult re = reequilibrate(x, lambda, rec);
+    rec.newtonIterations += re.iterations;
+    rec.residuals.insert(rec.residuals.end(), re.residuals.begin(), re.residuals.end());
+    if (!re.converged) {
+      nr = re;
+      nr.failure = "re-equilibration after breaking " + std::to_string(rep.brokenBonds) + " bond(s) failed: " + re.failure;
+      break;
+    }
+  }
+  if (!nr.converged) {
+    account(rec);
+    records_.back() = rec;
+    failure_ = "load step " + std::to_string(state_.step) + " (load factor " + std::to_string(lambda) + "): " + nr.failure;
+    return false;
+  }
+  rec.loadFactor = lambda;  // lowered if the damaged body could not carry the load
+  rec.elapsed = now() - tStep;
+  account(rec);
+  records_.back() = rec;
+  if (rec.brokenBonds > 0 || !rec.detached.empty()) note(damage_->describeStep(rec));
+  return true;
+}
+
+// The observers' veto (a stability check): the run stops at the previous step's state.
+bool LoadStepper::vetted(const StepRecord& rec, const NewtonResult& nr, const Thyra::VectorBase<double>& x, double previous) {
+  const StepInfo info{rec, nr, x, state_.loadFactor};
+  std::string vetoed;
+  for (auto* o : observers_)
+    if (vetoed.empty()) vetoed = o->vet(info, previous);
+  if (vetoed.empty()) return true;
+  failure_ = vetoed;
+  state_.loadFactor = previous;
+  setLoadFactor(previous);
+  return false;
+}
+
+// The step becomes the converged state; the increment grows back after easy steps.
+void LoadStepper::accept(const Thyra::VectorBase<double>& x, const StepRecord& rec, const NewtonResult& nr, double previous) {
+  Thyra::copy(*xConverged_, xPrevious_.ptr());
+  Thyra::copy(x, xConverged_.ptr());
+  path_.push_back(state_.loadFactor);
+  state_.lastIncrement = rec.loadFactor - previous;
+  double& increment = state_.increment;
+  const double nominal = 1.0 / options_.loadSteps;
+  if (options_.adaptive) {
+    if (nr.iterations <= options_.easyIterations) increment = std::min(options_.maxIncrement, 1.5 * increment);
+  } else if (increment < nominal && nr.iterations <= 6) {
+    increment = std::min(nominal, 2 * increment);
+  }
+  const StepInfo info{rec, nr, *xConverged_, state_.loadFactor};
+  for (auto* o : observers_) o->accepted(info);
 }
 
 std::string LoadStepper::tangent(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& z) {

@@ -10,6 +10,7 @@
 //   newtonStatusTests      FiniteValue OR NormalizedResidualTest OR MaxIters, ready for
 //                          NOX::Solver::buildSolver.
 // NewtonSolver (NewtonSolver.hpp) is built from these.
+#include <NOX_Solver_Generic.H>
 #include <NOX_StatusTest_Combo.H>
 #include <NOX_StatusTest_FiniteValue.H>
 #include <NOX_StatusTest_Generic.H>
@@ -93,5 +94,39 @@ struct NewtonStatusTests {
 };
 NewtonStatusTests newtonStatusTests(Teuchos::RCP<const ResidualScale> scale, double tolerance, int maxIterations,
                                     double floorFactor = 2.0, int stagnationStop = 0);
+
+// A Newton solve set up the way NewtonSolver sets it up, for a host that runs NOX itself:
+//   auto group = countingGroup(model, x, options.linearTolerance);
+//   auto tests = newtonStatusTests(scale, options.tolerance, options.maxIterations, ...);
+//   auto solver = NOX::Solver::buildSolver(group, tests.combo, newtonParameters(options));
+//   return solveNox(*solver, tests, group.get(), x, options.maxIterations);
+
+/// NOX's parameters: options.lineSearch (a line search, or "Trust Region" / "Inexact Trust
+/// Region"), Newton directions with the constant forcing term options.linearTolerance and
+/// "Rescue Bad Newton Solve", NOX's output at options.verbosity on rank 0.
+Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& options);
+/// For a host that hands NOX (or Piro, as its "NOX" sublist) the whole list and lets NOX build the
+/// status tests: newtonParameters(options) with "Status Tests" = RelativeNormF (|F| <=
+/// relativeTolerance |F(x0)|) OR NormF (|F| <= options.floorFactor * roundoff, where |F| cannot
+/// fall further; PeridynamicEvaluator::roundoffScale) OR MaxIters (options.maxIterations) OR
+/// FiniteValue. (NOX's default, |F| < 1e-8, means nothing for forces of 1e7 N.)
+Teuchos::RCP<Teuchos::ParameterList> newtonParametersWithStatusTests(const NewtonOptions& options, double relativeTolerance,
+                                                                    double roundoff);
+/// A CountingGroup at the initial guess x (copied), with the model's W_prec when it supports one
+/// (matrix-free W_op); linear solves above linearTolerance count as unconverged.
+Teuchos::RCP<CountingGroup> countingGroup(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>& model,
+                                          const Thyra::VectorBase<double>& x, double linearTolerance);
+/// The outcome of a NOX solve as NewtonSolver reports it: convergence (NOX's status and the
+/// residual test's), iterations and the residual history, the linear work of group (may be
+/// null), and for a failed solve without `failure` (why it threw) the most specific cause.
+NewtonResult newtonResult(const NewtonStatusTests& tests, const CountingGroup* group, NOX::StatusTest::StatusType status,
+                          int iterations, const std::string& failure, int maxIterations);
+/// Why the NOX solve being handled threw, as NewtonSolver reports it ("model evaluation failed: ...",
+/// the linear solver's reason, "nonlinear solver error: ..."). Call it inside a catch block.
+std::string noxFailure();
+/// Runs solver (built on group and tests), copies its solution into x and returns newtonResult;
+/// an exception becomes the result's failure (the load stepper then cuts back).
+NewtonResult solveNox(NOX::Solver::Generic& solver, const NewtonStatusTests& tests, const CountingGroup* group,
+                      Thyra::VectorBase<double>& x, int maxIterations);
 
 }  // namespace perinox

@@ -178,6 +178,16 @@ class LoadStepper {
   const std::string& failure() const { return failure_; }
 
  private:
+  // The named steps of run(), in order.
+  Teuchos::RCP<Thyra::VectorBase<double>> firstStepTangent();
+  NewtonResult solveWithCutbacks(Thyra::VectorBase<double>& x, StepRecord& rec, int& cut,
+                                 const Thyra::VectorBase<double>* firstTangent);
+  void breakAtStall(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double stepIncrement);
+  bool breakAfterConvergence(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double tStep);
+  bool vetted(const StepRecord& rec, const NewtonResult& nr, const Thyra::VectorBase<double>& x, double previous);
+  void accept(const Thyra::VectorBase<double>& x, const StepRecord& rec, const NewtonResult& nr, double previous);
+  /// The work of the step under way into its record.
+  void account(StepRecord& rec) const;
   NewtonResult reequilibrate(Thyra::VectorBase<double>& x, double& lambda, StepRecord& rec);
   /// z = dx/dlambda at the converged state x from J z = -df/dlambda; "" or why it failed.
   std::string tangent(const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& z);

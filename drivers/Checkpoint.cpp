@@ -1,0 +1,276 @@
+// Checkpoints of load stepping (Checkpoint.hpp).
+#include "Checkpoint.hpp"
+
+#include <Teuchos_CommHelpers.hpp>
+#include <Teuchos_XMLParameterListHelpers.hpp>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "Agreed.hpp"
+#include "Observers.hpp"
+#include "RunOutput.hpp"
+#include "perinox/io/Output.hpp"
+
+namespace perinox {
+
+namespace fs = std::filesystem;
+
+std::string resolvedSceneText(const Scene& scene) {
+  std::ostringstream s;
+  Teuchos::writeParameterListToXmlOStream(*scene.resolved, s);
+  return s.str();
+}
+
+void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const PeridynamicEvaluator& ev,
+                     const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious,
+                     const Teuchos::Comm<int>& comm) {
+  const int rank = comm.getRank();
+  agreed(comm, [&] {
+    if (rank == 0) openStaging(plan);
+  });
+  agreed(comm, [&] {
+    std::ostringstream out;
+    out << std::hexfloat;
+    const auto xv = ev.ownedFreeValues(x), pv = ev.ownedFreeValues(xPrevious);
+    for (std::size_t k = 0; k < xv.size(); ++k) out << "x " << xv[k].first << ' ' << xv[k].second << ' ' << pv[k].second << '\n';
+    for (const auto& [a, b] : ev.ownedBrokenBonds()) out << "bond " << a << ' ' << b << '\n';
+    for (const auto& [g, v] : ev.ownedFrozenDofs()) out << "frozen " << g << ' ' << v << '\n';
+    writeFileAtomic(plan.staging + "/rank_" + std::to_string(rank) + ".txt", out.str());
+  });
+  agreed(comm, [&] {
+    if (rank != 0) return;
+    nlohmann::json st = state;
+    st["ranks"] = comm.getSize();
+    writeFileAtomic(plan.staging + "/state.json", st.dump(1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+    // Replace the previous checkpoint only once the new one is complete; the old one is moved
+    // aside first, so a job killed in between leaves DIR.old or DIR, never neither.
+    commitFolder(plan);
+  });
+}
+
+namespace {
+
+/// state.json, parsed, with the keys every checkpoint has.
+nlohmann::json readState(const std::string& dir, const std::string& where) {
+  std::ifstream sj(dir + "/state.json");
+  if (!sj)
+    throw std::invalid_argument(where + ": no state.json there (not a checkpoint" +
+                                (fs::exists(dir + ".old/state.json") ? std::string(": the job was killed while replacing it; the previous one is '") + dir + ".old'" : std::string()) +
+                                ")");
+  nlohmann::json state;
+  try {
+    state = nlohmann::json::parse(sj);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::invalid_argument(where + ": state.json is truncated or damaged (not valid JSON at byte " +
+                                std::to_string(e.byte) + ")");
+  }
+  if (state.value("format", 0) != 1 || !state.contains("scene") || !state.contains("ranks"))
+    throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 1)");
+  return state;
+}
+
+/// A resolved scene's physics as "Sublist/Key" -> (exact value, value as shown): the run controls,
+/// which may change between the segments of a run (limits that stopped it, the linear solver,
+/// NOX's verbosity, the output options), left out; the order of the keys and whether a value came
+/// from the scene file, a --set or a default do not matter, only the values.
+std::map<std::string, std::pair<std::string, std::string>> physicsValues(const std::string& xml, const std::string& where) {
+  Teuchos::RCP<Teuchos::ParameterList> pl;
+  try {
+    pl = Teuchos::getParametersFromXmlString(xml);
+  } catch (const std::exception&) {
+    throw std::invalid_argument(where + ": the scene kept in its state.json is not readable XML (damaged checkpoint)");
+  }
+  if (pl->isSublist("Solver")) {
+    auto& so = pl->sublist("Solver");
+    for (const char* k : {"Max Total Steps", "Linear Solver Preset", "Linear Solver", "Verbosity"}) so.remove(k, false);
+  }
+  if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
+  if (pl->isSublist("Discretization")) pl->sublist("Discretization").remove("Partition", false);
+  pl->remove("Output", false);
+  std::map<std::string, std::pair<std::string, std::string>> values;
+  std::function<void(const Teuchos::ParameterList&, const std::string&)> walk = [&](const Teuchos::ParameterList& l,
+                                                                                    const std::string& prefix) {
+    for (auto it = l.begin(); it != l.end(); ++it) {
+      const std::string key = prefix + l.name(it);
+      const auto& e = l.entry(it);
+      if (e.isList()) {
+        walk(Teuchos::getValue<Teuchos::ParameterList>(e), key + "/");
+      } else {
+        std::ostringstream exact, shown;
+        exact << std::setprecision(17) << e.getAny(false);
+        shown << e.getAny(false);
+        values[key] = {exact.str(), shown.str()};
+      }
+    }
+  };
+  walk(*pl, "");
+  return values;
+}
+
+/// Refuses a checkpoint of another scene, naming the first differing key and both values.
+void checkSameScene(const Scene& scene, const nlohmann::json& state, const std::string& where) {
+  const auto mine = physicsValues(resolvedSceneText(scene), where), theirs = physicsValues(state["scene"].get<std::string>(), where);
+  if (mine == theirs) return;
+  std::string what;
+  for (const auto& [k, v] : mine) {
+    const auto t = theirs.find(k);
+    if (t == theirs.end()) {
+      what = "'" + k + "' = " + v.second + " now, not in the checkpoint's scene";
+      break;
+    }
+    if (t->second.first != v.first) {
+      what = "'" + k + "' = " + v.second + " now, " + t->second.second + " in the checkpoint";
+      break;
+    }
+  }
+  if (what.empty())
+    for (const auto& [k, v] : theirs)
+      if (!mine.count(k)) {
+        what = "'" + k + "' = " + v.second + " in the checkpoint, not in this scene";
+        break;
+      }
+  throw std::invalid_argument(where + " is for another scene: " + what + " (only run controls may differ, README)");
+}
+
+/// Everything the loop will read from state.json, checked now, before any output exists: values a
+/// run could have written (a counter a whole number within its range, a load factor in [0, 1], an
+/// increment in (0, 1]), the step records, the detached particles and the probe histories.
+void checkStateValues(const nlohmann::json& state, const Scene& scene, long long particles, const std::string& where) {
+  try {
+    for (const char* k : {"step", "lambda", "increment", "last_increment", "stall_breaks", "elapsed_s", "segment"}) {
+      const double v = state.at(k).get<double>();
+      if (!std::isfinite(v)) throw std::runtime_error(std::string("'") + k + "' is not a finite number");
+    }
+    auto whole = [&](const char* k, long long lo, long long hi) {
+      const double v = state.at(k).get<double>();
+      if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi))
+        throw std::runtime_error(std::string("'") + k + "' = " + state.at(k).dump() + " is not a whole number in [" +
+                                 std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    };
+    auto within = [&](const char* k, double lo, double hi, bool openLow) {
+      const double v = state.at(k).get<double>();
+      if (v > hi || v < lo || (openLow && v == lo))
+        throw std::runtime_error(std::string("'") + k + "' = " + state.at(k).dump() + " lies outside " +
+                                 (openLow ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    };
+    whole("step", 0, 2000000000);
+    whole("stall_breaks", 0, 2000000000);
+    whole("segment", 1, 1000000000);
+    within("lambda", 0.0, 1.0, false);
+    within("increment", 0.0, 1.0, true);
+    within("last_increment", 0.0, 1.0, false);
+    within("elapsed_s", 0.0, 1e12, false);
+    if (state.at("steps").size() != state.at("step").get<std::size_t>())
+      throw std::runtime_error("it records " + std::to_string(state.at("steps").size()) + " steps, not 'step' = " +
+                               state.at("step").dump());
+    for (const auto& sj : state.at("steps")) (void)stepFromJson(sj);
+    (void)state.at("path_load_factors").get<std::vector<double>>();
+    for (long long id : state.at("detached").get<std::vector<long long>>())
+      if (id < 0 || id >= particles)
+        throw std::runtime_error("detached particle " + std::to_string(id) + " is not one of the " +
+                                 std::to_string(particles) + " particles");
+    const auto& probes = state.at("probes");
+    if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
+    for (const auto& p : probes) (void)p.get<std::vector<std::pair<double, std::vector<double>>>>();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(where + ": state.json is incomplete or damaged (" + e.what() + ")");
+  }
+}
+
+/// One rank file's lines ("x GID X XPREV", "bond GID_I GID_J", "frozen GID VALUE") into c.
+void readRankFile(const std::string& f, long long freeDofs, long long particles, Checkpoint& c, const std::string& where) {
+  std::ifstream in(f);
+  if (!in) throw std::invalid_argument(where + ": " + f + " is missing");
+  std::string line, kind;
+  // A number as written (hexadecimal floating point), finite, with nothing after it.
+  auto number = [&](const std::string& t, bool& ok) {
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    ok = ok && end && *end == '\0' && end != t.c_str() && std::isfinite(v);
+    return v;
+  };
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    ls >> kind;
+    long long g = 0, h = 0;
+    std::string v1, v2;
+    bool ok = true;
+    if (kind == "x") {
+      ok = static_cast<bool>(ls >> g >> v1 >> v2);
+      if (ok) {
+        c.x.emplace_back(g, number(v1, ok));
+        c.xPrevious.emplace_back(g, number(v2, ok));
+      }
+    } else if (kind == "bond") {
+      ok = static_cast<bool>(ls >> g >> h) && g >= 0 && h >= 0 && g < particles && h < particles && g != h;
+      if (ok) c.broken.emplace_back(g, h);
+    } else if (kind == "frozen") {
+      ok = static_cast<bool>(ls >> g >> v1) && g >= 0 && g < freeDofs;
+      if (ok) c.frozen.emplace_back(g, number(v1, ok));
+    } else {
+      ok = false;
+    }
+    if (!ok) throw std::invalid_argument(where + ": unreadable line in " + f + ": '" + line + "'");
+  }
+}
+
+}  // namespace
+
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles) {
+  const std::string where = "checkpoint '" + dir + "'";
+  Checkpoint c;
+  c.state = readState(dir, where);
+  checkSameScene(scene, c.state, where);
+  checkStateValues(c.state, scene, particles, where);
+  const int ranks = c.state["ranks"];
+  for (int r = 0; r < ranks; ++r) readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", freeDofs, particles, c, where);
+  std::vector<long long> ids;
+  for (const auto& e : c.x) ids.push_back(e.first);
+  std::sort(ids.begin(), ids.end());
+  const bool complete = static_cast<long long>(ids.size()) == freeDofs &&
+                        std::adjacent_find(ids.begin(), ids.end()) == ids.end() &&
+                        (ids.empty() || (ids.front() == 0 && ids.back() == freeDofs - 1));
+  if (!complete)
+    throw std::invalid_argument(where + " holds " + std::to_string(ids.size()) + " displacement values for " +
+                                std::to_string(freeDofs) + " free DOFs (damaged or from another discretisation)");
+  return c;
+}
+
+void CheckpointWriter::accepted(const StepInfo& s) {
+  const auto& state = stepper_.state();
+  int due = (options_.checkpointSteps > 0 && state.step % options_.checkpointSteps == 0) ||
+            (options_.checkpointSeconds > 0 && wallSeconds() - last_ >= options_.checkpointSeconds);
+  Teuchos::broadcast(comm_, 0, Teuchos::outArg(due));  // clocks differ between ranks
+  if (!due) return;
+  nlohmann::json st;
+  st["format"] = 1;
+  st["scene"] = resolvedSceneText(scene_);
+  st["step"] = state.step;
+  st["lambda"] = state.loadFactor;
+  st["increment"] = state.increment;
+  st["last_increment"] = state.lastIncrement;
+  st["stall_breaks"] = state.stallBreaks;
+  st["elapsed_s"] = wallSeconds() - t0_ + elapsedBefore_;
+  st["segment"] = segment_;
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& sr : stepper_.records()) steps.push_back(stepJson(sr, true, false));
+  st["steps"] = steps;
+  st["path_load_factors"] = stepper_.path();
+  nlohmann::json probes = nlohmann::json::array();
+  for (const auto& pr : res_.probes) probes.push_back(pr.second);
+  st["probes"] = probes;
+  st["detached"] = ev_.detachedParticles();
+  writeCheckpoint(folder_, st, ev_, s.x, stepper_.previous(), comm_);
+  last_ = wallSeconds();
+  if (comm_.getRank() == 0 && !options_.quiet)
+    std::cout << "  checkpoint after step " << state.step << " in " << folder_.target << std::endl;
+}
+
+}  // namespace perinox

@@ -1,0 +1,66 @@
+#pragma once
+// Checkpoints of load stepping (perinox_app; README, "Checkpoints"): a folder written after a
+// converged step, read back (and checked against the scene) to resume a run on any number of ranks.
+#include <Teuchos_Comm.hpp>
+#include <Thyra_VectorBase.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "Simulation.hpp"
+#include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/io/OutputFolder.hpp"
+#include "Observers.hpp"  // wallSeconds
+#include "perinox/stepping/LoadStepper.hpp"
+
+namespace perinox {
+
+/// Everything a load-stepping run needs to go on from a converged step. Vectors, bonds and
+/// frozen DOFs are by global id, so a checkpoint can be resumed on any number of ranks.
+/// Files: state.json (rank 0: counters, step records, probes) and rank_R.txt per writing rank
+/// (lines "x GID X XPREV", "bond GID_I GID_J", "frozen GID VALUE"; doubles in hexadecimal, so a
+/// resumed run starts from bit-identical numbers).
+struct Checkpoint {
+  nlohmann::json state;
+  std::vector<std::pair<long long, double>> x, xPrevious, frozen;
+  std::vector<std::pair<long long, long long>> broken;
+};
+
+/// The resolved scene as XML text (a checkpoint keeps it; a resumed run must match it).
+std::string resolvedSceneText(const Scene& scene);
+
+/// Writes a checkpoint (state on rank 0, the rank files on every rank) into plan's staging folder
+/// and moves it into place. Collective.
+void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const PeridynamicEvaluator& ev,
+                     const Thyra::VectorBase<double>& x, const Thyra::VectorBase<double>& xPrevious,
+                     const Teuchos::Comm<int>& comm);
+
+/// Reads a checkpoint written for this scene (freeDofs unknowns); throws std::invalid_argument
+/// naming the problem.
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles);
+
+/// Checkpoints after accepted steps, every --checkpoint-steps steps and/or --checkpoint-seconds.
+class CheckpointWriter final : public StepObserver {
+ public:
+  CheckpointWriter(const RunOptions& options, const FolderPlan& folder, const Scene& scene, const PeridynamicEvaluator& ev,
+                   const Teuchos::Comm<int>& comm, const LoadStepper& stepper, const RunResult& res, double t0,
+                   double elapsedBefore, int segment)
+      : options_(options), folder_(folder), scene_(scene), ev_(ev), comm_(comm), stepper_(stepper), res_(res), t0_(t0),
+        elapsedBefore_(elapsedBefore), segment_(segment), last_(wallSeconds()) {}
+  void accepted(const StepInfo& s) override;
+
+ private:
+  const RunOptions& options_;
+  const FolderPlan& folder_;
+  const Scene& scene_;
+  const PeridynamicEvaluator& ev_;
+  const Teuchos::Comm<int>& comm_;
+  const LoadStepper& stepper_;
+  const RunResult& res_;
+  double t0_, elapsedBefore_;
+  int segment_;
+  double last_;
+};
+
+}  // namespace perinox
