@@ -21,6 +21,8 @@
 
 using namespace perinox;
 
+constexpr const char* kUsage = "usage: bench_partition SCENE.xml [--set Key=value]... [--parts 1,2,4,8,16]\n";
+
 int main(int argc, char** argv) {
   Tpetra::ScopeGuard tpetra(&argc, &argv);  // MPI and Kokkos, which Zoltan2 uses
   std::vector<std::string> overrides;
@@ -37,12 +39,12 @@ int main(int argc, char** argv) {
     } else if (scenePath.empty() && a.rfind("--", 0) != 0) {
       scenePath = a;
     } else {
-      std::cerr << "usage: bench_partition SCENE.xml [--set Key=value]... [--parts 1,2,4,8,16]\n";
+      std::cerr << kUsage;
       return 2;
     }
   }
   if (scenePath.empty()) {
-    std::cerr << "usage: bench_partition SCENE.xml [--set Key=value]... [--parts 1,2,4,8,16]\n";
+    std::cerr << kUsage;
     return 2;
   }
   try {
