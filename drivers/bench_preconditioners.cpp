@@ -432,10 +432,13 @@ Teuchos::ParameterList mueluBase(int dim, bool allDofs) {
   return p;
 }
 
-/// The built-in candidates, by name.
-std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
+/// The candidates collected so far, with the ways to add one.
+struct CandidateSet {
+  int dim;
   std::map<std::string, Teuchos::ParameterList> c;
-  auto ifpack = [&](const std::string& name, const std::string& matrix, int fill) {
+
+  /// Ifpack2 RILUK(fill) on the given matrix, free-DOF map.
+  void ifpack(const std::string& name, const std::string& matrix, int fill) {
     Teuchos::ParameterList p;
     p.set("Matrix", matrix);
     p.set("DOF Map", "Free");
@@ -443,10 +446,9 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     p.set("Ifpack2 Type", "RILUK");
     p.sublist("Parameters").set("fact: iluk level-of-fill", fill);
     c[name] = p;
-  };
-  ifpack("ilu0", "Jacobian", 0);
-  ifpack("riluk1", "Jacobian", 1);
-  auto muelu = [&](const std::string& name, const std::string& matrix, bool allDofs) -> Teuchos::ParameterList& {
+  }
+  /// MueLu (mueluBase) on the given matrix; returns its MueLu list to adjust.
+  Teuchos::ParameterList& muelu(const std::string& name, const std::string& matrix, bool allDofs) {
     Teuchos::ParameterList p;
     p.set("Matrix", matrix);
     p.set("DOF Map", allDofs ? "All" : "Free");
@@ -454,116 +456,9 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     p.set("Parameters", mueluBase(dim, allDofs));
     c[name] = p;
     return c[name].sublist("Parameters");
-  };
-  // (a) MueLu on the full Jacobian
-  {  // what the issue tried: the free-DOF map with 'number of equations' = dim (invalid block size)
-    auto& m = muelu("muelu-J-free-numeq", "Jacobian", false);
-    m.set("number of equations", dim);
-    m.set("aggregation: drop scheme", "classical");
-    m.set("aggregation: drop tol", 0.02);
-    m.set("coarse: max size", 300);
   }
-  {  // free map, one equation per node (scalar aggregation of the DOFs), rigid-body modes
-    auto& m = muelu("muelu-J-free-scalar", "Jacobian", false);
-    m.set("aggregation: drop scheme", "classical");
-    m.set("aggregation: drop tol", 0.02);
-  }
-  {  // all-DOF map, no dropping
-    auto& m = muelu("muelu-J-all", "Jacobian", true);
-    m.set("aggregation: drop scheme", "classical");
-    m.set("aggregation: drop tol", 0.0);
-  }
-  {  // all-DOF map, distance-Laplacian dropping (coordinates) to the nearest neighbours
-    auto& m = muelu("muelu-J-dl", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.05);
-    m.set("aggregation: min agg size", 4);
-    m.set("aggregation: max agg size", 16);
-    m.set("sa: use filtered matrix", true);
-    m.set("filtered matrix: use lumping", true);
-  }
-  {  // the same with a weaker drop (second neighbours kept)
-    auto& m = muelu("muelu-J-dl02", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.02);
-    m.set("sa: use filtered matrix", true);
-    m.set("filtered matrix: use lumping", true);
-  }
-  {  // muelu-J-dl02 without lumping the dropped couplings onto the diagonal of the filtered matrix
-    auto& m = muelu("muelu-J-dl02-nolump", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.02);
-    m.set("sa: use filtered matrix", true);
-    m.set("filtered matrix: use lumping", false);
-  }
-  {  // muelu-J-dl02 with Chebyshev degree 2 (each degree costs one product with J)
-    auto& m = muelu("muelu-J-dl02-cheb2", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.02);
-    m.set("sa: use filtered matrix", true);
-    m.sublist("smoother: params").set("chebyshev: degree", 2);
-  }
-  {  // muelu-J-dl02 with larger aggregates
-    auto& m = muelu("muelu-J-dl02-agg", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.02);
-    m.set("aggregation: min agg size", 9);
-    m.set("aggregation: max agg size", 30);
-    m.set("sa: use filtered matrix", true);
-  }
-  {  // the same as muelu-J-dl with symmetric Gauss-Seidel smoothing
-    auto& m = muelu("muelu-J-dl-sgs", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.05);
-    m.set("sa: use filtered matrix", true);
-    m.set("smoother: type", "RELAXATION");
-    Teuchos::ParameterList sp;
-    sp.set("relaxation: type", "Symmetric Gauss-Seidel");
-    sp.set("relaxation: sweeps", 1);
-    m.set("smoother: params", sp);
-  }
-  {  // the same with ILU(0) smoothing
-    auto& m = muelu("muelu-J-dl-ilu", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.05);
-    m.set("sa: use filtered matrix", true);
-    m.set("smoother: type", "RILUK");
-    Teuchos::ParameterList sp;
-    sp.set("fact: iluk level-of-fill", 0);
-    m.set("smoother: params", sp);
-  }
-  {  // the same with Chebyshev degree 5
-    auto& m = muelu("muelu-J-dl-cheb5", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.05);
-    m.set("sa: use filtered matrix", true);
-    m.sublist("smoother: params").set("chebyshev: degree", 5);
-  }
-  {  // the same with Chebyshev degree 2
-    auto& m = muelu("muelu-J-dl-cheb2", "Jacobian", true);
-    m.set("aggregation: drop scheme", "distance laplacian");
-    m.set("aggregation: drop tol", 0.05);
-    m.set("sa: use filtered matrix", true);
-    m.sublist("smoother: params").set("chebyshev: degree", 2);
-  }
-  // (b) auxiliary local operators
-  for (const char* f : {"1.015", "1.5", "2.015"}) {
-    auto& m = muelu(std::string("aux") + f, "Auxiliary", true);
-    c[std::string("aux") + f].set("Auxiliary Horizon Factor", std::stod(f));
-    m.set("aggregation: drop scheme", "classical");
-    m.set("aggregation: drop tol", 0.0);
-  }
-  {
-    auto& m = muelu("aux1.015-sgs", "Auxiliary", true);
-    c["aux1.015-sgs"].set("Auxiliary Horizon Factor", 1.015);
-    m.set("smoother: type", "RELAXATION");
-    Teuchos::ParameterList sp;
-    sp.set("relaxation: type", "Symmetric Gauss-Seidel");
-    sp.set("relaxation: sweeps", 1);
-    m.set("smoother: params", sp);
-  }
-  // (b') the same with a smoother on J itself around the auxiliary V-cycle
-  auto fine = [&](const std::string& base, const std::string& name, const std::string& type, int degree) {
+  /// The candidate base with a smoother on J itself around its V-cycle.
+  void fine(const std::string& base, const std::string& name, const std::string& type, int degree) {
     c[name] = c[base];
     auto& fs = c[name].sublist("Fine Smoother");
     fs.set("Type", type);
@@ -577,40 +472,154 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
     } else {
       fs.sublist("Parameters").set("fact: iluk level-of-fill", 0);
     }
-  };
-  {
-    auto& m = muelu("q1", "Q1", true);
+  }
+  /// The candidate base built once at the reference state (name base@ref).
+  void atReference(const std::string& base) {
+    c[base + "@ref"] = c[base];
+    c[base + "@ref"].set("Build At", "Reference");
+  }
+};
+
+/// One symmetric Gauss-Seidel sweep as MueLu's level smoother.
+void sgsSmoother(Teuchos::ParameterList& m) {
+  m.set("smoother: type", "RELAXATION");
+  Teuchos::ParameterList sp;
+  sp.set("relaxation: type", "Symmetric Gauss-Seidel");
+  sp.set("relaxation: sweeps", 1);
+  m.set("smoother: params", sp);
+}
+
+/// (a) MueLu on the full Jacobian: DOF maps, drop schemes, aggregates and smoothers.
+void addJacobianMueluCandidates(CandidateSet& s) {
+  const int dim = s.dim;
+  {  // what the issue tried: the free-DOF map with 'number of equations' = dim (invalid block size)
+    auto& m = s.muelu("muelu-J-free-numeq", "Jacobian", false);
+    m.set("number of equations", dim);
+    m.set("aggregation: drop scheme", "classical");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("coarse: max size", 300);
+  }
+  {  // free map, one equation per node (scalar aggregation of the DOFs), rigid-body modes
+    auto& m = s.muelu("muelu-J-free-scalar", "Jacobian", false);
+    m.set("aggregation: drop scheme", "classical");
+    m.set("aggregation: drop tol", 0.02);
+  }
+  {  // all-DOF map, no dropping
+    auto& m = s.muelu("muelu-J-all", "Jacobian", true);
     m.set("aggregation: drop scheme", "classical");
     m.set("aggregation: drop tol", 0.0);
   }
-  {
-    auto& m = muelu("q1-sgs", "Q1", true);
-    m.set("smoother: type", "RELAXATION");
+  {  // all-DOF map, distance-Laplacian dropping (coordinates) to the nearest neighbours
+    auto& m = s.muelu("muelu-J-dl", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.05);
+    m.set("aggregation: min agg size", 4);
+    m.set("aggregation: max agg size", 16);
+    m.set("sa: use filtered matrix", true);
+    m.set("filtered matrix: use lumping", true);
+  }
+  {  // the same with a weaker drop (second neighbours kept)
+    auto& m = s.muelu("muelu-J-dl02", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("sa: use filtered matrix", true);
+    m.set("filtered matrix: use lumping", true);
+  }
+  {  // muelu-J-dl02 without lumping the dropped couplings onto the diagonal of the filtered matrix
+    auto& m = s.muelu("muelu-J-dl02-nolump", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("sa: use filtered matrix", true);
+    m.set("filtered matrix: use lumping", false);
+  }
+  {  // muelu-J-dl02 with Chebyshev degree 2 (each degree costs one product with J)
+    auto& m = s.muelu("muelu-J-dl02-cheb2", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("sa: use filtered matrix", true);
+    m.sublist("smoother: params").set("chebyshev: degree", 2);
+  }
+  {  // muelu-J-dl02 with larger aggregates
+    auto& m = s.muelu("muelu-J-dl02-agg", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.02);
+    m.set("aggregation: min agg size", 9);
+    m.set("aggregation: max agg size", 30);
+    m.set("sa: use filtered matrix", true);
+  }
+  {  // the same as muelu-J-dl with symmetric Gauss-Seidel smoothing
+    auto& m = s.muelu("muelu-J-dl-sgs", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.05);
+    m.set("sa: use filtered matrix", true);
+    sgsSmoother(m);
+  }
+  {  // the same with ILU(0) smoothing
+    auto& m = s.muelu("muelu-J-dl-ilu", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.05);
+    m.set("sa: use filtered matrix", true);
+    m.set("smoother: type", "RILUK");
     Teuchos::ParameterList sp;
-    sp.set("relaxation: type", "Symmetric Gauss-Seidel");
-    sp.set("relaxation: sweeps", 1);
+    sp.set("fact: iluk level-of-fill", 0);
     m.set("smoother: params", sp);
   }
-  {  // the direct-neighbour part of J (today's mf-muelu matrix), on the all-DOF map
-    auto& m = muelu("nbr", "Neighbours", true);
+  {  // the same with Chebyshev degree 5
+    auto& m = s.muelu("muelu-J-dl-cheb5", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.05);
+    m.set("sa: use filtered matrix", true);
+    m.sublist("smoother: params").set("chebyshev: degree", 5);
+  }
+  {  // the same with Chebyshev degree 2
+    auto& m = s.muelu("muelu-J-dl-cheb2", "Jacobian", true);
+    m.set("aggregation: drop scheme", "distance laplacian");
+    m.set("aggregation: drop tol", 0.05);
+    m.set("sa: use filtered matrix", true);
+    m.sublist("smoother: params").set("chebyshev: degree", 2);
+  }
+}
+
+/// (b) MueLu on auxiliary local operators (the nearest-neighbour correspondence operator, Q1, the
+/// direct-neighbour part of J), alone and with a smoother on J around the V-cycle.
+void addAuxiliaryCandidates(CandidateSet& s) {
+  for (const char* f : {"1.015", "1.5", "2.015"}) {
+    auto& m = s.muelu(std::string("aux") + f, "Auxiliary", true);
+    s.c[std::string("aux") + f].set("Auxiliary Horizon Factor", std::stod(f));
     m.set("aggregation: drop scheme", "classical");
     m.set("aggregation: drop tol", 0.0);
   }
-  fine("aux1.015", "aux1.015+cheb2", "CHEBYSHEV", 2);
-  c["aux1.015+cheb2@ref"] = c["aux1.015+cheb2"];
-  c["aux1.015+cheb2@ref"].set("Build At", "Reference");
-  c["muelu-J-dl02@ref"] = c["muelu-J-dl02"];
-  c["muelu-J-dl02@ref"].set("Build At", "Reference");
-  c["ilu0@ref"] = c["ilu0"];
-  c["ilu0@ref"].set("Build At", "Reference");
-  fine("aux1.015", "aux1.015+cheb3", "CHEBYSHEV", 3);
-  fine("aux1.015", "aux1.015+sgs", "RELAXATION", 1);
-  fine("aux1.015", "aux1.015+ilu0", "RILUK", 0);
-  fine("aux1.5", "aux1.5+cheb2", "CHEBYSHEV", 2);
-  fine("aux1.5", "aux1.5+sgs", "RELAXATION", 1);
-  fine("q1", "q1+cheb2", "CHEBYSHEV", 2);
-  fine("q1", "q1+sgs", "RELAXATION", 1);
-  // (c) FROSch two-level Schwarz on the full Jacobian (all-DOF map)
+  {
+    auto& m = s.muelu("aux1.015-sgs", "Auxiliary", true);
+    s.c["aux1.015-sgs"].set("Auxiliary Horizon Factor", 1.015);
+    sgsSmoother(m);
+  }
+  {
+    auto& m = s.muelu("q1", "Q1", true);
+    m.set("aggregation: drop scheme", "classical");
+    m.set("aggregation: drop tol", 0.0);
+  }
+  {
+    auto& m = s.muelu("q1-sgs", "Q1", true);
+    sgsSmoother(m);
+  }
+  {  // the direct-neighbour part of J (today's mf-muelu matrix), on the all-DOF map
+    auto& m = s.muelu("nbr", "Neighbours", true);
+    m.set("aggregation: drop scheme", "classical");
+    m.set("aggregation: drop tol", 0.0);
+  }
+  s.fine("aux1.015", "aux1.015+cheb2", "CHEBYSHEV", 2);
+  s.fine("aux1.015", "aux1.015+cheb3", "CHEBYSHEV", 3);
+  s.fine("aux1.015", "aux1.015+sgs", "RELAXATION", 1);
+  s.fine("aux1.015", "aux1.015+ilu0", "RILUK", 0);
+  s.fine("aux1.5", "aux1.5+cheb2", "CHEBYSHEV", 2);
+  s.fine("aux1.5", "aux1.5+sgs", "RELAXATION", 1);
+  s.fine("q1", "q1+cheb2", "CHEBYSHEV", 2);
+  s.fine("q1", "q1+sgs", "RELAXATION", 1);
+}
+
+/// (c) FROSch two-level Schwarz on the full Jacobian (all-DOF map), overlaps 1 and 2, GDSW and RGDSW.
+void addFroschCandidates(CandidateSet& s) {
   for (int ov : {1, 2}) {
     for (const char* coarse : {"GDSW", "RGDSW"}) {
       Teuchos::ParameterList p;
@@ -634,17 +643,26 @@ std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
       co.sublist("CoarseSolver").set("Solver", "Klu");
       co.sublist("Distribution").set("Type", "linear");
       co.sublist("Distribution").set("NumProcs", 1);
-      c[std::string("frosch-") + (coarse[0] == 'G' ? "gdsw" : "rgdsw") + "-ov" + std::to_string(ov)] = p;
+      s.c[std::string("frosch-") + (coarse[0] == 'G' ? "gdsw" : "rgdsw") + "-ov" + std::to_string(ov)] = p;
     }
   }
-  {
-    Teuchos::ParameterList p;
-    p.set("Matrix", "Jacobian");
-    p.set("DOF Map", "Free");
-    p.set("Preconditioner", "None");
-    c["none"] = p;
-  }
-  return c;
+}
+
+/// The built-in candidates, by name.
+std::map<std::string, Teuchos::ParameterList> builtinCandidates(int dim) {
+  CandidateSet s{dim, {}};
+  s.ifpack("ilu0", "Jacobian", 0);
+  s.ifpack("riluk1", "Jacobian", 1);
+  addJacobianMueluCandidates(s);
+  addAuxiliaryCandidates(s);
+  addFroschCandidates(s);
+  for (const char* base : {"aux1.015+cheb2", "muelu-J-dl02", "ilu0"}) s.atReference(base);
+  Teuchos::ParameterList none;
+  none.set("Matrix", "Jacobian");
+  none.set("DOF Map", "Free");
+  none.set("Preconditioner", "None");
+  s.c["none"] = none;
+  return s.c;
 }
 
 struct Result {
@@ -771,22 +789,62 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   return pb;
 }
 
-Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, int restart, int maxIters,
-                    double timeLimit, bool verbose) {
-  Result res;
+/// The auxiliary evaluator's Jacobian (same particles and fixedMask, families rebuilt with the
+/// candidate's smaller horizon). The evaluator is built once per size: its construction and first
+/// assembly are reported apart (res.tOnce), and t0 restarts after them.
+RCP<TCrsMatrix> auxiliaryMatrix(const Problem& pb, Teuchos::ParameterList cand, bool atReference, Result& res,
+                                Clock::time_point& t0) {
   const PeridynamicEvaluator& ev = *pb.ev;
   auto comm = ev.comm();
-  const int D = ev.problem().dim();
+  // The auxiliary evaluator (same particles and fixedMask, families rebuilt with the smaller
+  // horizon) is built once per size: its construction and first assembly are reported apart.
+  const double factor = cand.get<double>("Auxiliary Horizon Factor", 1.015);
+  auto& entry = pb.aux[factor];
+  if (entry.ev.is_null()) {
+    const auto tb = Clock::now();
+    auto P = std::make_shared<ProblemSpec>(ev.problem());
+    P->disc.horizon = factor * P->disc.dx;
+    buildFamilies(P->disc);
+    entry.ev = rcp(new PeridynamicEvaluator(comm, P));
+    entry.ev->setLoadFactor(ev.loadFactor());
+    TEUCHOS_TEST_FOR_EXCEPTION(!entry.ev->ownedFreeMap()->isSameAs(*ev.ownedFreeMap()), std::logic_error,
+                               "the auxiliary problem has another free-DOF map");
+    entry.x = Thyra::createMember(entry.ev->get_x_space());
+    TOE::getTpetraVector(entry.x)->assign(*TOE::getConstTpetraVector(pb.x));
+    entry.ev->assembledJacobian(*entry.x);
+    comm->barrier();
+    entry.tBuild = seconds(tb);
+    t0 = Clock::now();
+  }
+  res.tOnce = entry.tBuild;
+  if (atReference) {
+    auto xr = entry.x->clone_v();
+    Thyra::assign(xr.ptr(), 0.0);
+    const double keep = entry.ev->loadFactor();
+    entry.ev->setLoadFactor(0.0);
+    auto A = entry.ev->assembledJacobian(*xr);
+    entry.ev->setLoadFactor(keep);
+    return A;
+  }
+  return entry.ev->assembledJacobian(*entry.x);
+}
+
+/// The preconditioner's matrix on the free map (free) and, for all-DOF candidates, on the all-DOF
+/// map (all); res.tMatrix and res.precNnz.
+struct PrecMatrices {
+  RCP<TCrsMatrix> free, all;
+};
+
+PrecMatrices preconditionerMatrix(const Problem& pb, Teuchos::ParameterList cand, Result& res) {
+  const PeridynamicEvaluator& ev = *pb.ev;
+  auto comm = ev.comm();
   const std::string matrix = cand.get<std::string>("Matrix", "Jacobian");
   const bool allDofs = cand.get<std::string>("DOF Map", "Free") == "All";
-  const std::string precType = cand.get<std::string>("Preconditioner", "None");
-  Teuchos::ParameterList params = cand.isSublist("Parameters") ? cand.sublist("Parameters") : Teuchos::ParameterList();
-
-  // 1. the preconditioner's matrix
   comm->barrier();
   auto t0 = Clock::now();
-  RCP<TCrsMatrix> A;  // on the free map
-  RCP<TCrsMatrix> Aall;
+  PrecMatrices m;
+  RCP<TCrsMatrix>& A = m.free;
+  RCP<TCrsMatrix>& Aall = m.all;
   // "Build At = Reference": the preconditioner's matrix is taken at the unloaded state (x = 0,
   // load factor 0: the linear tangent) instead of the state of the system, as a preconditioner
   // kept from the start of a run would be (the fine smoother of a two-stage candidate still uses
@@ -814,37 +872,7 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
     }
     A = ev.assembledJacobian(*pb.x, true);
   } else if (matrix == "Auxiliary") {
-    // The auxiliary evaluator (same particles and fixedMask, families rebuilt with the smaller
-    // horizon) is built once per size: its construction and first assembly are reported apart.
-    const double factor = cand.get<double>("Auxiliary Horizon Factor", 1.015);
-    auto& entry = pb.aux[factor];
-    if (entry.ev.is_null()) {
-      const auto tb = Clock::now();
-      auto P = std::make_shared<ProblemSpec>(ev.problem());
-      P->disc.horizon = factor * P->disc.dx;
-      buildFamilies(P->disc);
-      entry.ev = rcp(new PeridynamicEvaluator(comm, P));
-      entry.ev->setLoadFactor(ev.loadFactor());
-      TEUCHOS_TEST_FOR_EXCEPTION(!entry.ev->ownedFreeMap()->isSameAs(*ev.ownedFreeMap()), std::logic_error,
-                                 "the auxiliary problem has another free-DOF map");
-      entry.x = Thyra::createMember(entry.ev->get_x_space());
-      TOE::getTpetraVector(entry.x)->assign(*TOE::getConstTpetraVector(pb.x));
-      entry.ev->assembledJacobian(*entry.x);
-      comm->barrier();
-      entry.tBuild = seconds(tb);
-      t0 = Clock::now();
-    }
-    res.tOnce = entry.tBuild;
-    if (atReference) {
-      auto xr = entry.x->clone_v();
-      Thyra::assign(xr.ptr(), 0.0);
-      const double keep = entry.ev->loadFactor();
-      entry.ev->setLoadFactor(0.0);
-      A = entry.ev->assembledJacobian(*xr);
-      entry.ev->setLoadFactor(keep);
-    } else {
-      A = entry.ev->assembledJacobian(*entry.x);
-    }
+    A = auxiliaryMatrix(pb, cand, atReference, res, t0);
   } else if (matrix == "Q1") {
     TEUCHOS_TEST_FOR_EXCEPTION(!allDofs, std::invalid_argument, "Matrix Q1 is built on the all-DOF map");
   } else {
@@ -858,9 +886,22 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   res.tMatrix = seconds(t0);
   res.precNnz = allDofs ? Aall->getGlobalNumEntries() : A->getGlobalNumEntries();
 
-  // 2. the preconditioner
+  return m;
+}
+
+/// The candidate's preconditioner for J on the free map, from its matrices; res.tSetup and the
+/// hierarchy's figures.
+RCP<const OP> buildPreconditioner(const Problem& pb, Teuchos::ParameterList cand, const PrecMatrices& m, Result& res, bool verbose) {
+  const PeridynamicEvaluator& ev = *pb.ev;
+  auto comm = ev.comm();
+  const int D = ev.problem().dim();
+  const bool allDofs = cand.get<std::string>("DOF Map", "Free") == "All";
+  const std::string precType = cand.get<std::string>("Preconditioner", "None");
+  Teuchos::ParameterList params = cand.isSublist("Parameters") ? cand.sublist("Parameters") : Teuchos::ParameterList();
+  const RCP<TCrsMatrix>& A = m.free;
+  const RCP<TCrsMatrix>& Aall = m.all;
   comm->barrier();
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   RCP<const OP> M;
   if (precType == "Ifpack2") {
     TEUCHOS_TEST_FOR_EXCEPTION(allDofs, std::invalid_argument, "Ifpack2 candidates use the free-DOF map");
@@ -933,7 +974,14 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   comm->barrier();
   res.tSetup = seconds(t0);
 
-  // 3. GMRES
+  return M;
+}
+
+/// GMRES on J x = b with M on the right, stopped at the time limit; res's status, iterations,
+/// solve time and true residual.
+void gmresSolve(const Problem& pb, const RCP<const OP>& M, double tol, int restart, int maxIters, double timeLimit,
+                bool verbose, Result& res) {
+  auto comm = pb.ev->comm();
   auto b = TOE::getConstTpetraVector(pb.b);
   auto xs = rcp(new MV(b->getMap(), 1));
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeLimit));
@@ -954,7 +1002,7 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   }
   Belos::PseudoBlockGmresSolMgr<double, MV, OP> solver(lp, bp);
   comm->barrier();
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   try {
     const auto r = solver.solve();
     res.status = r == Belos::Converged ? "converged" : "unconverged";
@@ -972,6 +1020,14 @@ Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, 
   r.norm2(Teuchos::ArrayView<double>(rn));
   b->norm2(Teuchos::ArrayView<double>(bn));
   res.trueResidual = rn[0] / bn[0];
+}
+
+Result runCandidate(const Problem& pb, Teuchos::ParameterList cand, double tol, int restart, int maxIters,
+                    double timeLimit, bool verbose) {
+  Result res;
+  const auto matrices = preconditionerMatrix(pb, cand, res);
+  const auto M = buildPreconditioner(pb, cand, matrices, res, verbose);
+  gmresSolve(pb, M, tol, restart, maxIters, timeLimit, verbose, res);
   return res;
 }
 
@@ -984,18 +1040,19 @@ int usage(int code) {
   return code;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Tpetra::ScopeGuard guard(&argc, &argv);
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  const bool root = comm->getRank() == 0;
+/// The command line.
+struct Options {
   std::string scenePath = std::string(PERINOX_SOURCE_DIR) + "/xml/tension_block.xml";
   std::string csvPath, state = "affine", op = "assembled", tag;
   std::vector<std::string> sets, sizes, candidates;
   double tol = 1e-10, timeLimit = 600;
   int restart = 200, maxIters = 3000;
-  bool verbose = false, list = false;
+  bool verbose = false, list = false, help = false;
+};
+
+/// Reads the command line; throws std::invalid_argument naming a bad argument.
+Options parseOptions(int argc, char** argv) {
+  Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -1005,28 +1062,96 @@ int main(int argc, char** argv) {
     auto many = [&](std::vector<std::string>& v) {
       while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) v.push_back(argv[++i]);
     };
-    if (a == "--scene") scenePath = next();
-    else if (a == "--set") sets.push_back(next());
-    else if (a == "--sizes") many(sizes);
-    else if (a == "--candidates") many(candidates);
-    else if (a == "--csv") csvPath = next();
-    else if (a == "--state") state = next();
-    else if (a == "--operator") op = next();
-    else if (a == "--tag") tag = next();
-    else if (a == "--tol") tol = std::stod(next());
-    else if (a == "--restart") restart = std::stoi(next());
-    else if (a == "--max-iterations") maxIters = std::stoi(next());
-    else if (a == "--time-limit") timeLimit = std::stod(next());
-    else if (a == "--verbose") verbose = true;
-    else if (a == "--list") list = true;
-    else if (a == "--help" || a == "-h") return root ? usage(0) : 0;
-    else {
-      if (root) std::cerr << "bench_preconditioners: unknown argument '" << a << "'\n";
-      return root ? usage(2) : 2;
-    }
+    if (a == "--scene") o.scenePath = next();
+    else if (a == "--set") o.sets.push_back(next());
+    else if (a == "--sizes") many(o.sizes);
+    else if (a == "--candidates") many(o.candidates);
+    else if (a == "--csv") o.csvPath = next();
+    else if (a == "--state") o.state = next();
+    else if (a == "--operator") o.op = next();
+    else if (a == "--tag") o.tag = next();
+    else if (a == "--tol") o.tol = std::stod(next());
+    else if (a == "--restart") o.restart = std::stoi(next());
+    else if (a == "--max-iterations") o.maxIters = std::stoi(next());
+    else if (a == "--time-limit") o.timeLimit = std::stod(next());
+    else if (a == "--verbose") o.verbose = true;
+    else if (a == "--list") o.list = true;
+    else if (a == "--help" || a == "-h") o.help = true;
+    else throw std::invalid_argument("unknown argument '" + a + "'");
   }
-  const std::string presetDir = std::string(PERINOX_SOURCE_DIR) + "/xml/solvers";
-  if (list) {
+  return o;
+}
+
+/// A candidate by name (built in) or from an XML file; its display name in cname. Throws on an
+/// unknown name.
+Teuchos::ParameterList candidateNamed(const std::string& name, const std::map<std::string, Teuchos::ParameterList>& builtins,
+                                      int D, const Teuchos::Comm<int>& comm, std::string& cname) {
+  Teuchos::ParameterList cand;
+  cname = name;
+  if (name.size() > 4 && name.substr(name.size() - 4) == ".xml") {
+    Teuchos::updateParametersFromXmlFileAndBroadcast(name, Teuchos::ptrFromRef(cand), comm);
+    cname = name.substr(name.find_last_of('/') + 1);
+    cname = cname.substr(0, cname.size() - 4);
+    if (cand.isSublist("Parameters") && cand.get<std::string>("Preconditioner", "") == "MueLu" &&
+        !cand.sublist("Parameters").isParameter("number of equations"))
+      cand.sublist("Parameters").set("number of equations", cand.get<std::string>("DOF Map", "Free") == "All" ? D : 1);
+    return cand;
+  }
+  auto it = builtins.find(name);
+  if (it == builtins.end()) throw std::invalid_argument("unknown candidate '" + name + "' (--list shows them)");
+  return it->second;
+}
+
+/// The console line and CSV row of one candidate's result.
+void report(const Options& o, const Problem& pb, const std::string& size, const std::string& cname,
+            Teuchos::ParameterList cand, const Result& r, int ranks, std::ofstream& csv) {
+  const double tr = pb.tResidual;
+  const double setupR = (r.tMatrix + r.tSetup) / tr, solveR = r.tSolve / tr;
+  const double perIt = r.iterations > 0 ? solveR / r.iterations : NAN;
+  std::printf("%-10s %9lld %9lld %-20s %6d %5s %4d %6.2f %9.1e %8.4f %8.2f %8.2f %8.1f %8.1f %8.1f %8.1f %8.1f %9.1f%s%s\n",
+              size.c_str(), pb.realParticles, pb.ev->numFreeDofs(), cname.c_str(), r.iterations,
+              r.status == "converged" ? "yes" : (r.status == "time limit" ? "time" : "no"), r.levels,
+              r.complexity, r.trueResidual, tr, pb.tMatvec / tr, pb.tJvMf / tr, pb.tAssemble / tr, r.tOnce / tr, r.tMatrix / tr,
+              r.tSetup / tr, solveR, setupR + solveR, r.note.empty() ? "" : "  ", r.note.substr(0, 120).c_str());
+  std::fflush(stdout);
+  if (!csv.is_open()) return;
+  csv << o.tag << ',' << size << ',' << pb.realParticles << ',' << pb.ev->numFreeDofs() << ',' << ranks << ','
+      << o.state << ',' << o.op << ',' << cname << ',' << cand.get<std::string>("Matrix", "Jacobian") << ','
+      << cand.get<std::string>("DOF Map", "Free") << ',' << cand.get<std::string>("Preconditioner", "None")
+      << ',' << r.precNnz << ',' << r.levels << ',' << r.complexity << ',' << r.status << ','
+      << r.iterations << ',' << r.trueResidual << ',' << tr << ',' << pb.tMatvec << ',' << pb.tJvMf
+      << ',' << pb.tAssemble << ',' << r.tOnce << ',' << r.tMatrix << ',' << r.tFine << ',' << r.tSetup << ',' << r.tSolve << ','
+      << setupR << ',' << solveR << ',' << setupR + solveR << ',' << perIt << ',' << r.note << '\n';
+  csv.flush();
+}
+
+/// An empty CSV file (or none yet) gets the header row first.
+void openCsv(const std::string& path, std::ofstream& csv) {
+  std::ifstream probe(path);
+  const bool fresh = !probe.good() || probe.peek() == std::ifstream::traits_type::eof();
+  csv.open(path, std::ios::app);
+  if (fresh)
+    csv << "tag,lattice,particles,free_dofs,ranks,state,operator,candidate,matrix,dof_map,preconditioner,prec_nnz,levels,"
+           "op_complexity,status,iterations,true_rel_residual,t_residual_s,t_matvec_s,t_jv_matrix_free_s,"
+           "t_assemble_J_s,t_once_s,t_prec_matrix_s,t_fine_smoother_s,t_setup_s,t_solve_s,setup_in_residuals,solve_in_residuals,total_in_residuals,"
+           "per_iteration_in_residuals,note\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Tpetra::ScopeGuard guard(&argc, &argv);
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  const bool root = comm->getRank() == 0;
+  Options o;
+  try {
+    o = parseOptions(argc, argv);
+  } catch (const std::exception& e) {
+    if (root) std::cerr << "bench_preconditioners: " << e.what() << "\n";
+    return root ? usage(2) : 2;
+  }
+  if (o.help) return root ? usage(0) : 0;
+  if (o.list) {
     if (root)
       for (const auto& [name, p] : builtinCandidates(2)) {
         std::cout << "== " << name << "\n";
@@ -1034,55 +1159,37 @@ int main(int argc, char** argv) {
       }
     return 0;
   }
-  if (sizes.empty() || candidates.empty()) return root ? usage(2) : 2;
-
+  if (o.sizes.empty() || o.candidates.empty()) return root ? usage(2) : 2;
   std::ofstream csv;
-  if (root && !csvPath.empty()) {
-    std::ifstream probe(csvPath);
-    const bool fresh = !probe.good() || probe.peek() == std::ifstream::traits_type::eof();
-    csv.open(csvPath, std::ios::app);
-    if (fresh)
-      csv << "tag,lattice,particles,free_dofs,ranks,state,operator,candidate,matrix,dof_map,preconditioner,prec_nnz,levels,"
-             "op_complexity,status,iterations,true_rel_residual,t_residual_s,t_matvec_s,t_jv_matrix_free_s,"
-             "t_assemble_J_s,t_once_s,t_prec_matrix_s,t_fine_smoother_s,t_setup_s,t_solve_s,setup_in_residuals,solve_in_residuals,total_in_residuals,"
-             "per_iteration_in_residuals,note\n";
-  }
+  if (root && !o.csvPath.empty()) openCsv(o.csvPath, csv);
   if (root)
     std::printf("%-10s %9s %9s %-20s %6s %5s %4s %6s %9s %8s %8s %8s %8s %8s %8s %8s %8s %9s\n", "lattice", "particles",
                 "free DOFs", "candidate", "iters", "conv", "lev", "cplx", "true res", "res s", "matvec/r", "mfJv/r",
                 "asmJ/r", "once/r", "matrix/r", "setup/r", "solve/r", "total/r");
-  for (const auto& size : sizes) {
+  const std::string presetDir = std::string(PERINOX_SOURCE_DIR) + "/xml/solvers";
+  for (const auto& size : o.sizes) {
     Problem pb;
     try {
-      pb = buildProblem(comm, scenePath, sets, size, state, presetDir);
-      pb.matrixFree = op == "matrix-free";
+      pb = buildProblem(comm, o.scenePath, o.sets, size, o.state, presetDir);
+      pb.matrixFree = o.op == "matrix-free";
     } catch (const std::exception& e) {
       if (root) std::cerr << "bench_preconditioners: size " << size << ": " << e.what() << "\n";
       return 2;
     }
     const int D = pb.ev->problem().dim();
     const auto builtins = builtinCandidates(D);
-    for (const auto& name : candidates) {
+    for (const auto& name : o.candidates) {
       Teuchos::ParameterList cand;
-      std::string cname = name;
-      if (name.size() > 4 && name.substr(name.size() - 4) == ".xml") {
-        Teuchos::updateParametersFromXmlFileAndBroadcast(name, Teuchos::ptrFromRef(cand), *comm);
-        cname = name.substr(name.find_last_of('/') + 1);
-        cname = cname.substr(0, cname.size() - 4);
-        if (cand.isSublist("Parameters") && cand.get<std::string>("Preconditioner", "") == "MueLu" &&
-            !cand.sublist("Parameters").isParameter("number of equations"))
-          cand.sublist("Parameters").set("number of equations", cand.get<std::string>("DOF Map", "Free") == "All" ? D : 1);
-      } else {
-        auto it = builtins.find(name);
-        if (it == builtins.end()) {
-          if (root) std::cerr << "bench_preconditioners: unknown candidate '" << name << "' (--list shows them)\n";
-          return 2;
-        }
-        cand = it->second;
+      std::string cname;
+      try {
+        cand = candidateNamed(name, builtins, D, *comm, cname);
+      } catch (const std::invalid_argument& e) {
+        if (root) std::cerr << "bench_preconditioners: " << e.what() << "\n";
+        return 2;
       }
       Result r;
       try {
-        r = runCandidate(pb, cand, tol, restart, maxIters, timeLimit, verbose);
+        r = runCandidate(pb, cand, o.tol, o.restart, o.maxIters, o.timeLimit, o.verbose);
       } catch (const std::exception& e) {
         r.status = "failed";
         std::string msg = e.what();
@@ -1090,27 +1197,7 @@ int main(int argc, char** argv) {
           if (ch == '\n' || ch == ',' || ch == '"') ch = ' ';
         r.note = msg.substr(0, 300);
       }
-      const double tr = pb.tResidual;
-      const double setupR = (r.tMatrix + r.tSetup) / tr, solveR = r.tSolve / tr;
-      const double perIt = r.iterations > 0 ? solveR / r.iterations : NAN;
-      if (root) {
-        std::printf("%-10s %9lld %9lld %-20s %6d %5s %4d %6.2f %9.1e %8.4f %8.2f %8.2f %8.1f %8.1f %8.1f %8.1f %8.1f %9.1f%s%s\n",
-                    size.c_str(), pb.realParticles, pb.ev->numFreeDofs(), cname.c_str(), r.iterations,
-                    r.status == "converged" ? "yes" : (r.status == "time limit" ? "time" : "no"), r.levels,
-                    r.complexity, r.trueResidual, tr, pb.tMatvec / tr, pb.tJvMf / tr, pb.tAssemble / tr, r.tOnce / tr, r.tMatrix / tr,
-                    r.tSetup / tr, solveR, setupR + solveR, r.note.empty() ? "" : "  ", r.note.substr(0, 120).c_str());
-        std::fflush(stdout);
-        if (csv.is_open()) {
-          csv << tag << ',' << size << ',' << pb.realParticles << ',' << pb.ev->numFreeDofs() << ',' << comm->getSize() << ','
-              << state << ',' << op << ',' << cname << ',' << cand.get<std::string>("Matrix", "Jacobian") << ','
-              << cand.get<std::string>("DOF Map", "Free") << ',' << cand.get<std::string>("Preconditioner", "None")
-              << ',' << r.precNnz << ',' << r.levels << ',' << r.complexity << ',' << r.status << ','
-              << r.iterations << ',' << r.trueResidual << ',' << tr << ',' << pb.tMatvec << ',' << pb.tJvMf
-              << ',' << pb.tAssemble << ',' << r.tOnce << ',' << r.tMatrix << ',' << r.tFine << ',' << r.tSetup << ',' << r.tSolve << ',' << setupR << ',' << solveR << ','
-              << setupR + solveR << ',' << perIt << ',' << r.note << '\n';
-          csv.flush();
-        }
-      }
+      if (root) report(o, pb, size, cname, cand, r, comm->getSize(), csv);
     }
   }
   return 0;

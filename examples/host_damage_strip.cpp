@@ -10,8 +10,6 @@
 // (s_min 0.01, s_cr 0.02, continuous softening, stall breaks), MUMPS. The answer equals
 // `perinox run tests/scenes/damage_detach_strip.xml`.
 #include <NOX_Solver_Factory.H>
-#include <Teuchos_DefaultComm.hpp>
-#include <Tpetra_Core.hpp>
 #include <iostream>
 
 #include <perinox/io/HostOutput.hpp>
@@ -58,52 +56,35 @@ NewtonResult newtonSolve(const Teuchos::RCP<const Thyra::ModelEvaluator<double>>
   return solveNox(*solver, tests, group.get(), x, options.maxIterations);
 }
 
-/// 3. Records the reaction on the right grip after every accepted step.
-struct ReactionProbe : StepObserver {
-  ReactionProbe(const PeridynamicEvaluator& ev, std::vector<int> grip) : ev(ev), grip(std::move(grip)) {}
-  void accepted(const StepInfo& s) override { history.values.push_back({s.loadFactor, ev.reactionOn(s.x, grip)}); }
-  const PeridynamicEvaluator& ev;
-  std::vector<int> grip;
-  ProbeHistory history{"reaction", "reaction", {}};
-};
-
-int run(const std::string& outDir, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+int run(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const HostOptions& options) {
   auto evaluator = evaluatorWithSolver(comm, strip(), PERINOX_PRESETS "/mumps.xml");  // MUMPS: any rank count
 
-  // 4. The stepper drives the model through its load factor p(0); perinox's damage is its policy.
+  // 3. The stepper drives the model through its load factor p(0); perinox's damage is its policy.
   auto model = Teuchos::rcp(new LoadFactorModel(evaluator));
   model->onLoadFactor([ev = evaluator.get()](double lambda) { ev->setLoadFactor(lambda); });
   const auto scale = Teuchos::rcp(new EvaluatorResidualScale(evaluator));
-  LoadStepperOptions options;
-  options.predictor = false;  // as the scene: each step starts from the last converged state (10 steps)
-  LoadStepper stepper(model, [&](Thyra::VectorBase<double>& x) { return newtonSolve(model, scale, x); }, options);
+  LoadStepperOptions stepping;
+  stepping.predictor = false;  // as the scene: each step starts from the last converged state (10 steps)
+  LoadStepper stepper(model, [&](Thyra::VectorBase<double>& x) { return newtonSolve(model, scale, x); }, stepping);
   PeridynamicDamageOptions damageOptions;
   damageOptions.breakOnStalls = true;
   PeridynamicDamage damage(*evaluator, damageOptions);
   stepper.setDamagePolicy(&damage);
-  ReactionProbe probe(*evaluator, selectFictitiousSide(evaluator->problem().disc, Side::XMax));
-  stepper.addObserver(&probe);
+  const auto grip = selectFictitiousSide(evaluator->problem().disc, Side::XMax);
+  ValueRecorder reaction([&](const Thyra::VectorBase<double>& x) { return evaluator->reactionOn(x, grip); });
+  stepper.addObserver(&reaction);
   if (!stepper.run()) throw std::runtime_error(stepper.failure());
 
-  // 5. Output: the fields (VTU per rank, PVTU index) and the reaction per step (summary.json).
-  writeParticleFields(outDir, *evaluator, stepper.converged());
-  long long broken = 0;
-  for (const auto& r : stepper.records()) broken += r.brokenBonds;
-  writeProbeSummary(outDir + "/summary.json", *comm, {probe.history}, "\"broken_bonds_total\": " + std::to_string(broken));
+  // 4. Output: the fields (VTU per rank, PVTU index) and the reaction per step (summary.json).
+  const std::string& dir = options.at("output");
+  writeParticleFields(dir, *evaluator, stepper.converged());
+  const long long broken = stepper.brokenBonds();
+  writeProbeSummary(dir + "/summary.json", *comm, {{"reaction", "reaction", reaction.values()}},
+                    "\"broken_bonds_total\": " + std::to_string(broken));
   if (comm->getRank() == 0)
     std::cout << "converged in " << stepper.records().size() << " steps, " << broken << " bonds broken, "
-              << evaluator->detachedParticles().size() << " particles detached; results in " << outDir << "\n";
+              << evaluator->detachedParticles().size() << " particles detached; results in " << dir << "\n";
   return 0;
 }
 
-int main(int argc, char** argv) {
-  Tpetra::ScopeGuard mpi(&argc, &argv);
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  const std::string outDir = argc == 3 && std::string(argv[1]) == "--output" ? argv[2] : "host_damage_strip";
-  try {
-    return run(outDir, comm);
-  } catch (const std::exception& e) {  // perinox's errors are one sentence
-    if (comm->getRank() == 0) std::cerr << "host_damage_strip: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return hostMain(argc, argv, "host_damage_strip", {{"output", "host_damage_strip"}}, run); }

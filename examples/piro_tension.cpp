@@ -12,9 +12,7 @@
 #include <LOCA_Stepper.H>
 #include <Piro_LOCASolver.hpp>
 #include <Piro_NOXSolver.hpp>
-#include <Teuchos_DefaultComm.hpp>
 #include <Thyra_VectorStdOps.hpp>
-#include <Tpetra_Core.hpp>
 #include <iostream>
 
 #include <perinox/io/HostOutput.hpp>
@@ -114,21 +112,8 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
 }
 
 int main(int argc, char** argv) {
-  Tpetra::ScopeGuard mpi(&argc, &argv);  // MPI and Kokkos, as for any Tpetra program
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  std::string solverFile = PERINOX_PRESETS "/mumps.xml", outputFile = "piro_tension.json", loca = "no";
-  for (int i = 1; i < argc; i += 2) {
-    const std::string option = argv[i];
-    if (i + 1 == argc || (option != "--solver" && option != "--output" && option != "--loca")) {
-      if (comm->getRank() == 0) std::cerr << "usage: piro_tension [--solver STRATIMIKOS.xml] [--output FILE.json] [--loca yes|no]\n";
-      return 2;
-    }
-    (option == "--solver" ? solverFile : option == "--output" ? outputFile : loca) = argv[i + 1];
-  }
-  try {
-    return run(solverFile, outputFile, loca == "yes", comm);
-  } catch (const std::exception& e) {  // perinox's errors are one sentence (a bad problem, a bad list)
-    if (comm->getRank() == 0) std::cerr << "piro_tension: " << e.what() << "\n";
-    return 1;
-  }
+  return hostMain(argc, argv, "piro_tension", {{"solver", PERINOX_PRESETS "/mumps.xml"}, {"output", "piro_tension.json"}, {"loca", "no"}},
+                  [](const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const HostOptions& o) {
+                    return run(o.at("solver"), o.at("output"), o.at("loca") == "yes", comm);
+                  });
 }

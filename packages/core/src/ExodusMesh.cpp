@@ -221,19 +221,228 @@ std::string blockLabel(int id, const std::string& name) {
 
 }  // namespace
 
+namespace {
+
+/// Refuses a file that is not netCDF (classic/64-bit offset "CDF\001", "CDF\002", "CDF\005", or
+/// netCDF-4 on HDF5 "\211HDF") before the Exodus library sees it.
+void checkNetcdf(const std::string& path) {
+  std::ifstream probe(path, std::ios::binary);
+  if (!probe) fail(path, "cannot open the Exodus mesh for reading (no such file, or not readable)");
+  char magic[4] = {0, 0, 0, 0};
+  probe.read(magic, 4);
+  const bool cdf = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
+  const bool hdf = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
+  if (!cdf && !hdf) fail(path, "is not an Exodus II file (not a netCDF file)");
+}
+
+/// The mesh's header and node coordinates (2D scenes: z = 0).
+struct MeshHeader {
+  int numDim = 0, numNodes = 0, numElem = 0, numBlocks = 0, numNodeSets = 0, numSideSets = 0;
+  std::vector<double> cx, cy, cz;
+  Vec3 node(int n) const { return Vec3(cx[n - 1], cy[n - 1], cz[n - 1]); }  // 1-based node number
+};
+
+MeshHeader readHeader(int exo, const std::string& path, int dim) {
+  MeshHeader h;
+  char title[MAX_LINE_LENGTH + 1] = {0};
+  if (ex_get_init(exo, title, &h.numDim, &h.numNodes, &h.numElem, &h.numBlocks, &h.numNodeSets, &h.numSideSets) < 0)
+    fail(path, "is not an Exodus II file (no Exodus header)");
+  if (h.numBlocks <= 0) fail(path, "has no element blocks");
+  if (h.numElem <= 0) fail(path, "has no elements");
+  if (h.numDim < 2 || h.numDim > 3) fail(path, "has " + std::to_string(h.numDim) + "-dimensional coordinates (2 or 3 are read)");
+  if (dim == 3 && h.numDim < 3) fail(path, "is a 2D mesh but the scene is 3D ('Discretization/Dimension' = 3)");
+  h.cx.assign(h.numNodes, 0.0);
+  h.cy.assign(h.numNodes, 0.0);
+  h.cz.assign(h.numNodes, 0.0);
+  if (h.numNodes > 0 && ex_get_coord(exo, h.cx.data(), h.cy.data(), h.numDim == 3 ? h.cz.data() : nullptr) < 0)
+    fail(path, "has unreadable node coordinates");
+  for (int i = 0; i < h.numNodes; ++i)
+    if (!std::isfinite(h.cx[i]) || !std::isfinite(h.cy[i]) || !std::isfinite(h.cz[i]))
+      fail(path, "node " + std::to_string(i + 1) + " has a coordinate that is not a finite number");
+  if (dim == 2)
+    for (double& z : h.cz) z = 0;  // 2D: the x-y plane (as particle files do)
+  return h;
+}
+
+/// One block's element type and size, checked against the scene's dimension.
+struct BlockLayout {
+  Shape shape = Shape::Unsupported;
+  int count = 0, nodesPer = 0, attrs = 0, corners = 0;
+};
+
+BlockLayout readBlockLayout(int exo, const std::string& path, int dim, MeshBlock& blk) {
+  BlockLayout L;
+  char type[MAX_STR_LENGTH + 1] = {0};
+  if (ex_get_elem_block(exo, blk.id, type, &L.count, &L.nodesPer, &L.attrs) < 0)
+    fail(path, "has an unreadable " + blockLabel(blk.id, blk.name));
+  blk.elementType = type;
+  blk.elements = L.count;
+  if (L.count == 0) return L;
+  const std::string where = blockLabel(blk.id, blk.name);
+  L.shape = shapeOf(blk.elementType, L.nodesPer, L.corners);
+  if (L.shape == Shape::Unsupported)
+    fail(path, where + " has elements of type '" + blk.elementType + "' with " + std::to_string(L.nodesPer) +
+                   " nodes, which perinox does not read (hex, tet, wedge and sphere in 3D; quad, tri and sphere in 2D)");
+  if (dim == 3 && (L.shape == Shape::Quad || L.shape == Shape::Tri))
+    fail(path, where + " has 2D elements ('" + blk.elementType + "') but the scene is 3D ('Discretization/Dimension' = 3)");
+  if (dim == 2 && threeD(L.shape))
+    fail(path, where + " has 3D elements ('" + blk.elementType + "') but the scene is 2D ('Discretization/Dimension' = 2)");
+  return L;
+}
+
+/// Centroid and volume of one element from its corners (sphere: the node and the volume
+/// attribute); one sentence naming the element when it is degenerate, inverted or of no volume.
+Measure elementMeasure(const std::string& path, const std::string& element, const std::string& type, Shape shape,
+                       const std::array<Vec3, 8>& x, double sphereVolume) {
+  Measure m;
+  switch (shape) {
+    case Shape::Hex: m = hexMeasure(x); break;
+    case Shape::Tet: m = tetMeasure({x[0], x[1], x[2], x[3]}); break;
+    case Shape::Wedge: m = wedgeMeasure({x[0], x[1], x[2], x[3], x[4], x[5]}); break;
+    case Shape::Quad: m = quadMeasure({x[0], x[1], x[2], x[3]}); break;
+    case Shape::Tri: m = triMeasure({x[0], x[1], x[2]}); break;
+    default:  // sphere
+      m.centroid = x[0];
+      m.volume = sphereVolume;
+      if (!(m.volume > 0) || !std::isfinite(m.volume))
+        fail(path, element + " is a sphere with volume " + num(m.volume) + " (its second attribute must be positive)");
+      m.ok = true;
+  }
+  if (!m.ok) {
+    if (m.volume == 0) fail(path, element + " ('" + type + "') has zero volume (degenerate: coincident or flat corners)");
+    fail(path, element + " ('" + type + "') is inverted or degenerate (its Jacobian determinant is not positive everywhere: " +
+                   "check the node order)");
+  }
+  return m;
+}
+
+/// Reads one element block into particles (appended to mesh.disc, numbered from elem on) and
+/// records for every node the elements that touch it (for the node sets).
+void readBlock(int exo, const std::string& path, const MeshHeader& h, int blockId, double thickness, ExodusMesh& mesh,
+               std::vector<std::vector<int>>& elementsOfNode, int& elem) {
+  Discretization& d = mesh.disc;
+  MeshBlock blk;
+  blk.id = blockId;
+  blk.name = entityName(exo, EX_ELEM_BLOCK, blk.id);
+  if (blk.name.empty()) blk.name = "block_" + std::to_string(blk.id);  // Peridigm's name for an unnamed block
+  const BlockLayout L = readBlockLayout(exo, path, d.dim, blk);
+  const std::string where = blockLabel(blk.id, blk.name);
+  std::vector<int> conn(static_cast<std::size_t>(L.count) * L.nodesPer);
+  if (L.count > 0 && ex_get_elem_conn(exo, blk.id, conn.data()) < 0) fail(path, "has unreadable connectivity in " + where);
+  std::vector<double> attr;
+  if (L.shape == Shape::Sphere) {
+    // Peridigm's rule: attribute 1 is the sphere's radius, attribute 2 its volume.
+    if (L.attrs < 2)
+      fail(path, where + " has sphere elements with " + std::to_string(L.attrs) +
+                     " attribute(s); the volume is read from the second attribute (radius, volume)");
+    attr.resize(static_cast<std::size_t>(L.count) * L.attrs);
+    if (ex_get_elem_attr(exo, blk.id, attr.data()) < 0) fail(path, "has unreadable sphere attributes in " + where);
+  }
+  for (int e = 0; e < L.count; ++e, ++elem) {
+    const std::string element = "element " + std::to_string(elem + 1) + " of " + where;
+    std::array<Vec3, 8> x;
+    for (int a = 0; a < L.nodesPer; ++a) {
+      const int node = conn[static_cast<std::size_t>(e) * L.nodesPer + a];
+      if (node < 1 || node > h.numNodes)
+        fail(path, element + " names node " + std::to_string(node) + ", but the mesh has " + std::to_string(h.numNodes) + " nodes");
+      if (a < L.corners) x[a] = h.node(node);
+      auto& list = elementsOfNode[node - 1];
+      if (list.empty() || list.back() != elem) list.push_back(elem);
+    }
+    const double sphereVolume = L.shape == Shape::Sphere ? attr[static_cast<std::size_t>(e) * L.attrs + 1] : 0.0;
+    Measure m = elementMeasure(path, element, blk.elementType, L.shape, x, sphereVolume);
+    if (L.shape == Shape::Quad || L.shape == Shape::Tri) m.volume *= thickness;
+    if (d.dim == 2) m.centroid[2] = 0;
+    d.X.push_back(m.centroid);
+    d.volume.push_back(m.volume);
+    d.block.push_back(blk.id);
+  }
+  mesh.blocks.push_back(blk);
+}
+
+/// Sorted, without repeats.
+void uniqueSorted(std::vector<int>& v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
+/// Node sets: the particles of the elements touching the set's nodes (Peridigm's rule).
+void readNodeSets(int exo, const std::string& path, const MeshHeader& h, const std::vector<std::vector<int>>& elementsOfNode,
+                  ExodusMesh& mesh) {
+  if (h.numNodeSets <= 0) return;
+  std::vector<int> ids(h.numNodeSets);
+  if (ex_get_node_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable node set ids");
+  for (int id : ids) {
+    MeshSet set;
+    set.id = id;
+    set.name = entityName(exo, EX_NODE_SET, id);
+    if (set.name.empty()) set.name = "nodelist_" + std::to_string(id);  // Peridigm's name for an unnamed node set
+    int n = 0, df = 0;
+    if (ex_get_node_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
+    std::vector<int> nodes(n);
+    if (n > 0 && ex_get_node_set(exo, id, nodes.data()) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
+    for (int node : nodes) {
+      if (node < 1 || node > h.numNodes)
+        fail(path, "node set " + std::to_string(id) + " names node " + std::to_string(node) + ", but the mesh has " +
+                       std::to_string(h.numNodes) + " nodes");
+      for (int e : elementsOfNode[node - 1]) set.particles.push_back(e);
+    }
+    uniqueSorted(set.particles);
+    mesh.nodeSets.push_back(set);
+  }
+}
+
+/// Side sets: the particles of the listed elements (Peridigm ignores side sets).
+void readSideSets(int exo, const std::string& path, const MeshHeader& h, ExodusMesh& mesh) {
+  if (h.numSideSets <= 0) return;
+  const int elements = mesh.disc.size();
+  std::vector<int> ids(h.numSideSets);
+  if (ex_get_side_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable side set ids");
+  for (int id : ids) {
+    MeshSet set;
+    set.id = id;
+    set.name = entityName(exo, EX_SIDE_SET, id);
+    int n = 0, df = 0;
+    if (ex_get_side_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable side set " + std::to_string(id));
+    std::vector<int> elems(n), sides(n);
+    if (n > 0 && ex_get_side_set(exo, id, elems.data(), sides.data()) < 0)
+      fail(path, "has an unreadable side set " + std::to_string(id));
+    for (int e : elems) {
+      if (e < 1 || e > elements)
+        fail(path, "side set " + std::to_string(id) + " names element " + std::to_string(e) + ", but the mesh has " +
+                       std::to_string(elements) + " elements");
+      set.particles.push_back(e - 1);
+    }
+    uniqueSorted(set.particles);
+    mesh.sideSets.push_back(set);
+  }
+}
+
+/// The discretisation's box, flags and nominal spacing: the median particle's edge (3D:
+/// volume^(1/3); 2D: (volume / h)^(1/2)). The horizon is the scene's (0 here).
+void finishDiscretization(Discretization& d) {
+  const std::size_t n = d.X.size();
+  d.fictitious.assign(n, 0);
+  d.sideMask.assign(n, 0);
+  d.boxLower = d.X[0];
+  d.boxUpper = d.X[0];
+  for (const Vec3& x : d.X) {
+    d.boxLower = d.boxLower.cwiseMin(x);
+    d.boxUpper = d.boxUpper.cwiseMax(x);
+  }
+  std::vector<double> v(d.volume);
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  const double med = v[v.size() / 2];
+  d.dx = d.dim == 3 ? std::cbrt(med) : std::sqrt(med / d.thickness);
+  d.horizon = 0;
+}
+
+}  // namespace
+
 ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
   if (dim != 2 && dim != 3) fail(path, "Exodus meshes are for 2D and 3D scenes ('Discretization/Dimension' = 2 or 3)");
   if (!(thickness > 0) || !std::isfinite(thickness)) fail(path, "the thickness must be positive and finite");
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) fail(path, "cannot open the Exodus mesh for reading (no such file, or not readable)");
-    char magic[4] = {0, 0, 0, 0};
-    probe.read(magic, 4);
-    // netCDF classic/64-bit offset ("CDF\001", "CDF\002", "CDF\005") or netCDF-4 on HDF5 ("\211HDF").
-    const bool cdf = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
-    const bool hdf = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
-    if (!cdf && !hdf) fail(path, "is not an Exodus II file (not a netCDF file)");
-  }
+  checkNetcdf(path);
   ex_opts(0);  // no messages on stderr and no abort: every failure becomes this reader's sentence
   int cpuWordSize = sizeof(double), ioWordSize = 0;
   float version = 0;
@@ -244,178 +453,23 @@ ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
   // Names longer than Exodus' default 32 characters come back whole only when asked for.
   const int usedNameLength = static_cast<int>(ex_inquire_int(exo, EX_INQ_DB_MAX_USED_NAME_LENGTH));
   if (usedNameLength > MAX_STR_LENGTH) ex_set_max_name_length(exo, std::min(usedNameLength, 256));
-
-  char title[MAX_LINE_LENGTH + 1] = {0};
-  int numDim = 0, numNodes = 0, numElem = 0, numBlocks = 0, numNodeSets = 0, numSideSets = 0;
-  if (ex_get_init(exo, title, &numDim, &numNodes, &numElem, &numBlocks, &numNodeSets, &numSideSets) < 0)
-    fail(path, "is not an Exodus II file (no Exodus header)");
-  if (numBlocks <= 0) fail(path, "has no element blocks");
-  if (numElem <= 0) fail(path, "has no elements");
-  if (numDim < 2 || numDim > 3) fail(path, "has " + std::to_string(numDim) + "-dimensional coordinates (2 or 3 are read)");
-  if (dim == 3 && numDim < 3) fail(path, "is a 2D mesh but the scene is 3D ('Discretization/Dimension' = 3)");
-
-  std::vector<double> cx(numNodes, 0.0), cy(numNodes, 0.0), cz(numNodes, 0.0);
-  if (numNodes > 0 && ex_get_coord(exo, cx.data(), cy.data(), numDim == 3 ? cz.data() : nullptr) < 0)
-    fail(path, "has unreadable node coordinates");
-  for (int i = 0; i < numNodes; ++i)
-    if (!std::isfinite(cx[i]) || !std::isfinite(cy[i]) || !std::isfinite(cz[i]))
-      fail(path, "node " + std::to_string(i + 1) + " has a coordinate that is not a finite number");
-  if (dim == 2)
-    for (double& z : cz) z = 0;  // 2D: the x-y plane (as particle files do)
-
-  std::vector<int> blockIds(numBlocks);
+  const MeshHeader h = readHeader(exo, path, dim);
+  std::vector<int> blockIds(h.numBlocks);
   if (ex_get_elem_blk_ids(exo, blockIds.data()) < 0) fail(path, "has unreadable element block ids");
 
   ExodusMesh mesh;
-  Discretization& d = mesh.disc;
-  d.dim = dim;
-  d.thickness = thickness;
-  // The elements of each node (0-based element = particle ids), for the node sets.
-  std::vector<std::vector<int>> elementsOfNode(numNodes);
+  mesh.disc.dim = dim;
+  mesh.disc.thickness = thickness;
+  std::vector<std::vector<int>> elementsOfNode(h.numNodes);  // 0-based element = particle ids
   int elem = 0;  // running element number = particle id (file order, block by block)
-  for (int b = 0; b < numBlocks; ++b) {
-    MeshBlock blk;
-    blk.id = blockIds[b];
-    blk.name = entityName(exo, EX_ELEM_BLOCK, blk.id);
-    if (blk.name.empty()) blk.name = "block_" + std::to_string(blk.id);  // Peridigm's name for an unnamed block
-    char type[MAX_STR_LENGTH + 1] = {0};
-    int count = 0, nodesPer = 0, attrs = 0;
-    if (ex_get_elem_block(exo, blk.id, type, &count, &nodesPer, &attrs) < 0)
-      fail(path, "has an unreadable " + blockLabel(blk.id, blk.name));
-    blk.elementType = type;
-    blk.elements = count;
-    const std::string where = blockLabel(blk.id, blk.name);
-    if (count == 0) {
-      mesh.blocks.push_back(blk);
-      continue;
-    }
-    int corners = 0;
-    const Shape shape = shapeOf(blk.elementType, nodesPer, corners);
-    if (shape == Shape::Unsupported)
-      fail(path, where + " has elements of type '" + blk.elementType + "' with " + std::to_string(nodesPer) +
-                     " nodes, which perinox does not read (hex, tet, wedge and sphere in 3D; quad, tri and sphere in 2D)");
-    if (dim == 3 && (shape == Shape::Quad || shape == Shape::Tri))
-      fail(path, where + " has 2D elements ('" + blk.elementType + "') but the scene is 3D ('Discretization/Dimension' = 3)");
-    if (dim == 2 && threeD(shape))
-      fail(path, where + " has 3D elements ('" + blk.elementType + "') but the scene is 2D ('Discretization/Dimension' = 2)");
-    std::vector<int> conn(static_cast<std::size_t>(count) * nodesPer);
-    if (ex_get_elem_conn(exo, blk.id, conn.data()) < 0) fail(path, "has unreadable connectivity in " + where);
-    std::vector<double> attr;
-    if (shape == Shape::Sphere) {
-      // Peridigm's rule: attribute 1 is the sphere's radius, attribute 2 its volume.
-      if (attrs < 2)
-        fail(path, where + " has sphere elements with " + std::to_string(attrs) +
-                       " attribute(s); the volume is read from the second attribute (radius, volume)");
-      attr.resize(static_cast<std::size_t>(count) * attrs);
-      if (ex_get_elem_attr(exo, blk.id, attr.data()) < 0) fail(path, "has unreadable sphere attributes in " + where);
-    }
-    for (int e = 0; e < count; ++e, ++elem) {
-      const std::string element = "element " + std::to_string(elem + 1) + " of " + where;
-      std::array<Vec3, 8> x;
-      for (int a = 0; a < nodesPer; ++a) {
-        const int node = conn[static_cast<std::size_t>(e) * nodesPer + a];
-        if (node < 1 || node > numNodes)
-          fail(path, element + " names node " + std::to_string(node) + ", but the mesh has " + std::to_string(numNodes) + " nodes");
-        if (a < corners) x[a] = Vec3(cx[node - 1], cy[node - 1], cz[node - 1]);
-        auto& list = elementsOfNode[node - 1];
-        if (list.empty() || list.back() != elem) list.push_back(elem);
-      }
-      Measure m;
-      switch (shape) {
-        case Shape::Hex: m = hexMeasure(x); break;
-        case Shape::Tet: m = tetMeasure({x[0], x[1], x[2], x[3]}); break;
-        case Shape::Wedge: m = wedgeMeasure({x[0], x[1], x[2], x[3], x[4], x[5]}); break;
-        case Shape::Quad: m = quadMeasure({x[0], x[1], x[2], x[3]}); break;
-        case Shape::Tri: m = triMeasure({x[0], x[1], x[2]}); break;
-        default:  // sphere
-          m.centroid = x[0];
-          m.volume = attr[static_cast<std::size_t>(e) * attrs + 1];
-          if (!(m.volume > 0) || !std::isfinite(m.volume))
-            fail(path, element + " is a sphere with volume " + num(m.volume) + " (its second attribute must be positive)");
-      }
-      if (!m.ok) {
-        if (m.volume == 0)
-          fail(path, element + " ('" + blk.elementType + "') has zero volume (degenerate: coincident or flat corners)");
-        fail(path, element + " ('" + blk.elementType + "') is inverted or degenerate (its Jacobian determinant is not positive everywhere: " +
-                       "check the node order)");
-      }
-      if (shape == Shape::Quad || shape == Shape::Tri) m.volume *= thickness;
-      if (dim == 2) m.centroid[2] = 0;
-      d.X.push_back(m.centroid);
-      d.volume.push_back(m.volume);
-      d.block.push_back(blk.id);
-    }
-    mesh.blocks.push_back(blk);
-  }
-  if (d.X.empty()) fail(path, "has no elements in its element blocks");
+  for (int id : blockIds) readBlock(exo, path, h, id, thickness, mesh, elementsOfNode, elem);
+  if (mesh.disc.X.empty()) fail(path, "has no elements in its element blocks");
   for (std::size_t i = 0; i < mesh.blocks.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)
       if (mesh.blocks[i].id == mesh.blocks[j].id) fail(path, "has two element blocks with id " + std::to_string(mesh.blocks[i].id));
-
-  // Node sets: the particles of the elements touching the set's nodes (Peridigm's rule).
-  if (numNodeSets > 0) {
-    std::vector<int> ids(numNodeSets);
-    if (ex_get_node_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable node set ids");
-    for (int id : ids) {
-      MeshSet set;
-      set.id = id;
-      set.name = entityName(exo, EX_NODE_SET, id);
-      if (set.name.empty()) set.name = "nodelist_" + std::to_string(id);  // Peridigm's name for an unnamed node set
-      int n = 0, df = 0;
-      if (ex_get_node_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
-      std::vector<int> nodes(n);
-      if (n > 0 && ex_get_node_set(exo, id, nodes.data()) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
-      for (int node : nodes) {
-        if (node < 1 || node > numNodes)
-          fail(path, "node set " + std::to_string(id) + " names node " + std::to_string(node) + ", but the mesh has " +
-                         std::to_string(numNodes) + " nodes");
-        for (int e : elementsOfNode[node - 1]) set.particles.push_back(e);
-      }
-      std::sort(set.particles.begin(), set.particles.end());
-      set.particles.erase(std::unique(set.particles.begin(), set.particles.end()), set.particles.end());
-      mesh.nodeSets.push_back(set);
-    }
-  }
-  // Side sets: the particles of the listed elements (Peridigm ignores side sets).
-  if (numSideSets > 0) {
-    std::vector<int> ids(numSideSets);
-    if (ex_get_side_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable side set ids");
-    for (int id : ids) {
-      MeshSet set;
-      set.id = id;
-      set.name = entityName(exo, EX_SIDE_SET, id);
-      int n = 0, df = 0;
-      if (ex_get_side_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable side set " + std::to_string(id));
-      std::vector<int> elems(n), sides(n);
-      if (n > 0 && ex_get_side_set(exo, id, elems.data(), sides.data()) < 0)
-        fail(path, "has an unreadable side set " + std::to_string(id));
-      for (int e : elems) {
-        if (e < 1 || e > d.size())
-          fail(path, "side set " + std::to_string(id) + " names element " + std::to_string(e) + ", but the mesh has " +
-                         std::to_string(d.size()) + " elements");
-        set.particles.push_back(e - 1);
-      }
-      std::sort(set.particles.begin(), set.particles.end());
-      set.particles.erase(std::unique(set.particles.begin(), set.particles.end()), set.particles.end());
-      mesh.sideSets.push_back(set);
-    }
-  }
-
-  const std::size_t n = d.X.size();
-  d.fictitious.assign(n, 0);
-  d.sideMask.assign(n, 0);
-  d.boxLower = d.X[0];
-  d.boxUpper = d.X[0];
-  for (const Vec3& x : d.X) {
-    d.boxLower = d.boxLower.cwiseMin(x);
-    d.boxUpper = d.boxUpper.cwiseMax(x);
-  }
-  // Nominal spacing: the median particle's edge (3D: volume^(1/3); 2D: (volume / h)^(1/2)).
-  std::vector<double> v(d.volume);
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  const double med = v[v.size() / 2];
-  d.dx = dim == 3 ? std::cbrt(med) : std::sqrt(med / thickness);
-  d.horizon = 0;
+  readNodeSets(exo, path, h, elementsOfNode, mesh);
+  readSideSets(exo, path, h, mesh);
+  finishDiscretization(mesh.disc);
   return mesh;
 }
 

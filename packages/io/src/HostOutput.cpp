@@ -1,14 +1,41 @@
 // Output for host programs (see HostOutput.hpp).
 #include "perinox/io/HostOutput.hpp"
 
+#include <Teuchos_DefaultComm.hpp>
+#include <Tpetra_Core.hpp>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <stdexcept>
 
 #include "perinox/io/Output.hpp"
 
 namespace perinox {
+
+int hostMain(int argc, char** argv, const std::string& name, HostOptions options, const HostBody& body) {
+  Tpetra::ScopeGuard mpi(&argc, &argv);
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  const bool root = comm->getRank() == 0;
+  for (int i = 1; i < argc; i += 2) {
+    const std::string key = std::string(argv[i]).rfind("--", 0) == 0 ? std::string(argv[i]).substr(2) : "";
+    if (i + 1 == argc || !options.count(key)) {
+      if (root) {
+        std::cerr << "usage: " << name;
+        for (const auto& [k, v] : options) std::cerr << " [--" << k << " VALUE (default " << (v.empty() ? "none" : v) << ")]";
+        std::cerr << "\n";
+      }
+      return 2;
+    }
+    options[key] = argv[i + 1];
+  }
+  try {
+    return body(comm, options);
+  } catch (const std::exception& e) {
+    if (root) std::cerr << name << ": " << e.what() << "\n";
+    return 1;
+  }
+}
 
 void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x) {
   const auto& d = ev.problem().disc;

@@ -1,9 +1,12 @@
 #pragma once
-// Output for host programs that drive the evaluator themselves (examples/): the particle fields
-// as VTU pieces with a PVTU index, and the probes in summary.json's layout, which
-// tests/compare_runs.py compares with a driver run. The driver's own output (fields, CSV, plots,
+// For host programs that drive the evaluator themselves (examples/): a main() with MPI, options
+// and one-sentence errors; the particle fields as VTU pieces with a PVTU index, and the probes in
+// summary.json's layout, which tests/compare_runs.py compares with a driver run. The driver's own output (fields, CSV, plots,
 // the output-folder policy) is in drivers/Simulation.cpp.
+#include <Teuchos_Comm.hpp>
 #include <Thyra_VectorBase.hpp>
+#include <functional>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +14,18 @@
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 
 namespace perinox {
+
+/// A host program's options: "--key value" pairs, each key from the program's list.
+using HostOptions = std::map<std::string, std::string>;
+
+/// The body of a host program: it gets the world communicator and the options, returns the exit code.
+using HostBody = std::function<int(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const HostOptions& options)>;
+
+/// A host program's main(): starts MPI and Kokkos (Tpetra::ScopeGuard), reads "--key value" options
+/// (the keys of defaults, which holds their default values) and runs body. An unknown key or a key
+/// without a value prints the usage line on rank 0 and returns 2; an exception thrown by body
+/// (perinox's are one sentence) is printed on rank 0 as "name: sentence" and returns 1.
+int hostMain(int argc, char** argv, const std::string& name, HostOptions defaults, const HostBody& body);
 
 /// A probe's history: load factor -> value (a displacement or a reaction, per component).
 struct ProbeHistory {

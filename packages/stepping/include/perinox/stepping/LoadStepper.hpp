@@ -12,6 +12,7 @@
 #include <Thyra_VectorBase.hpp>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "perinox/solver/NewtonSolver.hpp"
@@ -145,6 +146,20 @@ class StepObserver {
   virtual void accepted(const StepInfo&) {}
 };
 
+/// Records a value of the state (a probe: a mean displacement, a reaction) at every accepted step,
+/// with its load factor. The value function is called on every rank (it may be collective).
+class ValueRecorder final : public StepObserver {
+ public:
+  using Value = std::function<std::vector<double>(const Thyra::VectorBase<double>& x)>;
+  explicit ValueRecorder(Value value) : value_(std::move(value)) {}
+  void accepted(const StepInfo& s) override { values_.push_back({s.loadFactor, value_(s.x)}); }
+  const std::vector<std::pair<double, std::vector<double>>>& values() const { return values_; }
+
+ private:
+  Value value_;
+  std::vector<std::pair<double, std::vector<double>>> values_;
+};
+
 /// The stepper's own state, for checkpoints and restarts.
 struct StepperState {
   int step = 0;
@@ -173,6 +188,12 @@ class LoadStepper {
   const StepperState& state() const { return state_; }
   const std::vector<StepRecord>& records() const { return records_; }
   const std::vector<double>& path() const { return path_; }   // load factor of every accepted step
+  /// Bonds broken over the run (the sum of the records' brokenBonds).
+  long long brokenBonds() const {
+    long long n = 0;
+    for (const auto& r : records_) n += r.brokenBonds;
+    return n;
+  }
   const Thyra::VectorBase<double>& converged() const { return *xConverged_; }
   const Thyra::VectorBase<double>& previous() const { return *xPrevious_; }
   const std::string& failure() const { return failure_; }
