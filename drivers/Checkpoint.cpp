@@ -165,7 +165,7 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     whole("segment", 1, 1000000000);
     within("lambda", 0.0, 1.0, false);
     within("increment", 0.0, 1.0, true);
-    within("last_increment", 0.0, 1.0, false);
+    within("last_increment", -1.0, 1.0, false);  // negative after a snap-back lowered the load
     within("elapsed_s", 0.0, 1e12, false);
     if (state.at("steps").size() != state.at("step").get<std::size_t>())
       throw std::runtime_error("it records " + std::to_string(state.at("steps").size()) + " steps, not 'step' = " +

@@ -804,7 +804,7 @@ RCP<TCrsMatrix> auxiliaryMatrix(const Problem& pb, Teuchos::ParameterList cand, 
     const auto tb = Clock::now();
     auto P = std::make_shared<ProblemSpec>(ev.problem());
     P->disc.horizon = factor * P->disc.dx;
-    buildFamilies(P->disc);
+    if (!P->disc.familyOffset.empty()) buildFamilies(P->disc);  // else the evaluator finds its own
     entry.ev = rcp(new PeridynamicEvaluator(comm, P));
     entry.ev->setLoadFactor(ev.loadFactor());
     TEUCHOS_TEST_FOR_EXCEPTION(!entry.ev->ownedFreeMap()->isSameAs(*ev.ownedFreeMap()), std::logic_error,

@@ -38,6 +38,8 @@ def main():
     ap.add_argument("--from-step", type=int, required=True)
     ap.add_argument("--exact", action="store_true")
     ap.add_argument("--rtol", type=float, default=0.0)
+    ap.add_argument("--load-drop", action="store_true",
+                    help="the checkpoint's step K lowered the load factor (a snap-back): checked in the full run")
     ap.add_argument("full")
     ap.add_argument("resumed")
     a = ap.parse_args()
@@ -51,6 +53,10 @@ def main():
     if res["converged"] != full["converged"]:
         fail(f"converged: full {full['converged']}, resumed {res['converged']}")
     fs, rs = full["steps"], res["steps"]
+    if a.load_drop:
+        k0 = a.from_step
+        if k0 < 2 or k0 > len(fs) or not fs[k0 - 1]["load_factor"] < fs[k0 - 2]["load_factor"]:
+            fail(f"step {k0} of the full run does not lower the load factor (no snap-back at the checkpoint)")
     if len(fs) != len(rs):
         fail(f"{len(fs)} steps in the full run, {len(rs)} in the resumed one")
     if fs[:k] != rs[:k]:

@@ -8,7 +8,12 @@
 #include <Teuchos_DefaultComm.hpp>
 #include <algorithm>
 
+#include <Thyra_TpetraThyraWrappers.hpp>
+#include <cmath>
+
 #include "perinox/evaluator/Partitioner.hpp"
+#include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/evaluator/Problem.hpp"
 
 using namespace perinox;
 
@@ -120,4 +125,85 @@ TEST(DistributedLattice, NoRankHoldsTheWholeLattice) {
     EXPECT_EQ(mine.heldParticles, static_cast<std::size_t>(d.size()));
   }
   EXPECT_LE(mine.heldParticles, share + share / 2 + 200);
+}
+
+// A discretisation without families (as a scene builds it: no family array of global size on any
+// rank): each rank's owned particles, ghosts, families and the ghosts' families (for the matrix
+// graph) equal, entry for entry, those sliced from the whole lattice's families; and each rank
+// holds far fewer family entries than the whole lattice has bonds.
+TEST(LocalFamilies, WithoutGlobalFamiliesEqualTheSlicedOnes) {
+  for (const LatticeSpec& spec : lattices())
+    for (PartitionMethod m : {PartitionMethod::Rcb, PartitionMethod::Slabs}) {
+      const Discretization whole = buildLattice(spec), bare = buildLattice(spec, false);
+      ASSERT_TRUE(bare.familyOffset.empty());
+      const auto owned = ownedParticles(comm(), whole, m);
+      LocalFamilies fw, fb;
+      const LocalParticles ref = localParticles(whole, owned, &fw);
+      const LocalParticles lp = localParticles(bare, owned, &fb);
+      const std::string what = std::to_string(spec.dim) + "D, " + partitionName(m);
+      ASSERT_EQ(lp.numOwned, ref.numOwned) << what;
+      ASSERT_EQ(lp.globalId, ref.globalId) << what;
+      EXPECT_EQ(lp.famOffset, ref.famOffset) << what;
+      EXPECT_EQ(lp.famIndex, ref.famIndex) << what;
+      EXPECT_EQ(lp.X, ref.X) << what;
+      EXPECT_EQ(lp.volume, ref.volume) << what;
+      EXPECT_EQ(fb.ownedOffset, fw.ownedOffset) << what;
+      EXPECT_EQ(fb.ownedIndex, fw.ownedIndex) << what;
+      EXPECT_EQ(fb.ghostOffset, fw.ghostOffset) << what;
+      EXPECT_EQ(fb.ghostMembers, fw.ghostMembers) << what;
+      // The ghosts' families are the whole lattice's.
+      for (int k = 0; k + lp.numOwned < lp.size(); ++k) {
+        const long long g = lp.globalId[lp.numOwned + k];
+        const std::vector<long long> want(whole.familyIndex.begin() + whole.familyOffset[g],
+                                          whole.familyIndex.begin() + whole.familyOffset[g + 1]);
+        const std::vector<long long> got(fb.ghostMembers.begin() + fb.ghostOffset[k], fb.ghostMembers.begin() + fb.ghostOffset[k + 1]);
+        ASSERT_EQ(got, want) << what << ", ghost " << g;
+      }
+      const std::size_t held = lp.famIndex.size() + fb.ownedIndex.size() + fb.ghostMembers.size();
+      if (comm()->getSize() > 2 && spec.dim == 2)
+        EXPECT_LT(held, static_cast<std::size_t>(whole.familyOffset.back())) << what << ": " << held << " family entries held";
+    }
+}
+
+// The evaluator on a problem without families gives the same residual and Jacobian, bit for
+// bit, as on the same problem with the whole lattice's families.
+TEST(LocalFamilies, EvaluatorWithoutGlobalFamiliesGivesTheSameAnswers) {
+  LatticeSpec spec = lattices()[0];
+  spec.fictitiousSides = {Side::XMin};
+  auto withF = problemOnLattice(spec, {MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1000.0, 0.3});
+  withF->stabilization = true;
+  withF->stab.G = 0.1;
+  prescribe(*withF, selectFictitiousSide(withF->disc, Side::XMin), 0);
+  prescribe(*withF, selectFictitiousSide(withF->disc, Side::XMin), 1);
+  auto bare = std::make_shared<ProblemSpec>(*withF);
+  bare->disc.familyOffset.clear();
+  bare->disc.familyIndex.clear();
+  std::vector<Teuchos::RCP<const TCrsMatrix>> J;
+  std::vector<std::vector<double>> f;
+  for (const auto& P : {withF, bare}) {
+    PeridynamicEvaluator ev(comm(), P);
+    auto x = Thyra::createMember(ev.get_x_space());
+    auto xt = Thyra::TpetraOperatorVectorExtraction<double, LO, GO>::getTpetraVector(x);
+    auto xd = xt->getDataNonConst();
+    for (LO i = 0; i < static_cast<LO>(xd.size()); ++i) xd[i] = 1e-3 * std::sin(0.37 * static_cast<double>(xt->getMap()->getGlobalElement(i)));
+    xd = Teuchos::null;
+    auto fx = Thyra::createMember(ev.get_f_space());
+    auto in = ev.createInArgs();
+    in.set_x(x);
+    auto out = ev.createOutArgs();
+    out.set_f(fx);
+    ev.evalModel(in, out);
+    const auto fd = Thyra::TpetraOperatorVectorExtraction<double, LO, GO>::getConstTpetraVector(fx)->getData();
+    f.emplace_back(fd.begin(), fd.end());
+    J.push_back(ev.assembledJacobian(*x));
+  }
+  ASSERT_EQ(f[0], f[1]);
+  ASSERT_EQ(J[0]->getGlobalNumEntries(), J[1]->getGlobalNumEntries());
+  for (LO r = 0; r < static_cast<LO>(J[0]->getNodeNumRows()); ++r) {
+    Teuchos::ArrayView<const LO> c0, c1;
+    Teuchos::ArrayView<const double> v0, v1;
+    J[0]->getLocalRowView(r, c0, v0);
+    J[1]->getLocalRowView(r, c1, v1);
+    ASSERT_EQ(std::vector<double>(v0.begin(), v0.end()), std::vector<double>(v1.begin(), v1.end())) << "row " << r;
+  }
 }

@@ -18,16 +18,13 @@ memory exceeds --max-mib.
                             [--timeout 900] [--max-mib 12000] --out out/bench_scalable
 """
 import argparse
-import csv
 import json
 import os
-import subprocess
 import sys
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_solvers import peak_rss_mib  # noqa: E402
+from bench_solvers import csv_appender, run_polled  # noqa: E402
 
 # The 3D block: 1 x 0.5 x 0.25, pinned as in docs/performance.md's preconditioner study.
 SETS_3D = [
@@ -46,25 +43,15 @@ def run(perinox, scene, out, sets, timeout, np):
     for s in sets:
         cmd += ["--set", s]
     env = dict(os.environ, PERINOX_PLOT_SCRIPT="", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    t0 = time.time()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
-    rss = 0.0
-    while proc.poll() is None:
-        r = peak_rss_mib(proc.pid)
-        if r:
-            rss = max(rss, r)
-        if time.time() - t0 > timeout:
-            proc.kill()
-            proc.wait()
-            return {"status": "timeout", "wall": time.time() - t0, "rss_mib": rss}
-        time.sleep(0.25)
-    err = proc.stderr.read().decode(errors="replace").strip().splitlines()
+    code, wall, rss, last = run_polled(cmd, timeout, env)
+    if code == "timeout":
+        return {"status": "timeout", "wall": wall, "rss_mib": rss}
+    err = [last] if last else []
     try:
         with open(os.path.join(out, "summary.json")) as f:
             j = json.load(f)
     except OSError:
-        return {"status": "failed: " + (err[-1][:120] if err else f"exit {proc.returncode}"), "wall": time.time() - t0,
-                "rss_mib": rss}
+        return {"status": "failed: " + (err[-1][:120] if err else f"exit {code}"), "wall": wall, "rss_mib": rss}
     t = j.get("timing", {})
     solves = max(j.get("linear_solves_total", 0), 1)
     return {
@@ -99,11 +86,7 @@ def main():
     keys = ["tag", "dim", "lattice", "real_particles", "ranks", "preset", "status", "newton", "krylov_per_solve", "setup_s",
             "solve_s", "solve_us_per_particle", "residual_s", "newton_iteration_in_residuals", "peak_rss_mib", "matrix_mib"]
     path = os.path.join(a.out, "bench_scalable.csv")
-    new = not os.path.exists(path)
-    f = open(path, "a", newline="")
-    w = csv.DictWriter(f, fieldnames=keys)
-    if new:
-        w.writeheader()
+    w, f = csv_appender(path, keys)
     print(f"# {os.path.relpath(a.scene, ROOT)}, Silling G = {a.G}, delta = {a.horizon} dx, one load step, {a.np} rank(s) "
           f"{' '.join(a.sets)}")
     print(f"{'dim':>3} {'particles':>9} {'preset':>11} {'status':>10} {'Newton':>6} {'Krylov/solve':>12} {'set-up s':>8}"

@@ -32,13 +32,21 @@ def peak_rss_mib(pid):
     return None
 
 
-def run(perinox, scene, out, sets, timeout):
-    cmd = [perinox, "run", scene, "--output", out, "--quiet"]
-    for s in sets:
-        cmd += ["--set", s]
-    env = dict(os.environ, PERINOX_PLOT_SCRIPT="")
+def csv_appender(path, keys):
+    """A csv.DictWriter appending to path (the header written first into a new file) and its file."""
+    new = not os.path.exists(path)
+    f = open(path, "a", newline="")
+    w = csv.DictWriter(f, fieldnames=keys)
+    if new:
+        w.writeheader()
+    return w, f
+
+
+def run_polled(cmd, timeout, env):
+    """Runs cmd, polling its peak resident memory; returns (exit code, or "timeout" when it was
+    killed at the time limit; wall seconds; peak RSS MiB seen; the last line of its stderr)."""
     t0 = time.time()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     rss = 0.0
     while proc.poll() is None:
         r = peak_rss_mib(proc.pid)
@@ -47,14 +55,24 @@ def run(perinox, scene, out, sets, timeout):
         if time.time() - t0 > timeout:
             proc.kill()
             proc.wait()
-            # A run stopped at the time limit: its memory so far is a lower bound.
-            return {"timeout": True, "wall": time.time() - t0, "rss_mib": rss}
+            return "timeout", time.time() - t0, rss, ""
         time.sleep(0.25)
+    err = proc.stderr.read().decode(errors="replace").strip().splitlines()
+    return proc.returncode, time.time() - t0, rss, err[-1][:160] if err else ""
+
+
+def run(perinox, scene, out, sets, timeout):
+    cmd = [perinox, "run", scene, "--output", out, "--quiet"]
+    for s in sets:
+        cmd += ["--set", s]
+    code, wall, rss, _ = run_polled(cmd, timeout, dict(os.environ, PERINOX_PLOT_SCRIPT=""))
+    if code == "timeout":  # a run stopped at the time limit: its memory so far is a lower bound
+        return {"timeout": True, "wall": wall, "rss_mib": rss}
     try:
         with open(os.path.join(out, "summary.json")) as f:
             j = json.load(f)
     except OSError:
-        return {"failed": True, "wall": time.time() - t0}
+        return {"failed": True, "wall": wall}
     return {
         "converged": j["converged"],
         "wall": j["wall_time_s"],

@@ -206,12 +206,12 @@ Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::in
   return d;
 }
 
-Discretization buildLattice(const LatticeSpec& spec) {
+Discretization buildLattice(const LatticeSpec& spec, bool families) {
   const std::int64_t sites = latticeSiteCount(spec);
   Discretization d = latticeSites(spec, 0, sites, 0);
   if (std::count(d.fictitious.begin(), d.fictitious.end(), 0) == 0)
     fail("no real particle left in the lattice after cutting the holes");
-  buildFamilies(d);
+  if (families) buildFamilies(d);
   return d;
 }
 

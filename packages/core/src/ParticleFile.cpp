@@ -39,7 +39,7 @@ std::string num(double v) {
 }  // namespace
 
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
-                                double thickness) {
+                                double thickness, bool families) {
   if (dim < 1 || dim > 3)
     fail(path, 0, "dimension must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
   if (!(horizon > 0.0) || !std::isfinite(horizon))
@@ -105,7 +105,7 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
     d.boxLower = d.boxLower.cwiseMin(x);
     d.boxUpper = d.boxUpper.cwiseMax(x);
   }
-  buildFamilies(d);
+  if (families) buildFamilies(d);
   return d;
 }
 

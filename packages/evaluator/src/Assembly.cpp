@@ -196,8 +196,8 @@ class TpetraSink final : public ElementSink {
 // ---------------------------------------------------------------------------------------------
 
 Assembler::Assembler(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem, const Model& model,
-                     const DofMaps& dofs)
-    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs) {}
+                     const DofMaps& dofs, const LocalFamilies& families)
+    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), families_(families) {}
 
 const JacobianGraphs& Assembler::graphs(bool neighbours) const {
   JacobianGraphs& g = neighbours ? nbr_ : full_;
@@ -274,9 +274,9 @@ JacobianGraphs Assembler::buildGraphs(bool neighbours) const {
   return g;
 }
 
-// The owned graph, computed from the replicated families: row particle p couples to every
-// particle of every element that contains p, i.e. of {i} u H_i for i in {p} u H_p (only those
-// within one horizon of p with neighbours).
+// The owned graph, from the families as built (the owned particles' and their ghosts'): row
+// particle p couples to every particle of every element that contains p, i.e. of {i} u H_i for
+// i in {p} u H_p (only those within one horizon of p with neighbours).
 Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   const Discretization& d = problem_.disc;
   const int D = problem_.dim();
@@ -290,15 +290,21 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   std::vector<GO> rows;
   std::vector<long long> S;
   const LocalParticles& lp = model_.particles();
+  const LocalFamilies& F = families_;
+  auto addElement = [&](int local) {  // {i} u H_i of local particle i
+    S.push_back(lp.globalId[local]);
+    if (local < lp.numOwned) {
+      for (auto q = F.ownedOffset[local]; q < F.ownedOffset[local + 1]; ++q) S.push_back(lp.globalId[F.ownedIndex[q]]);
+    } else {
+      const int k = local - lp.numOwned;
+      S.insert(S.end(), F.ghostMembers.begin() + F.ghostOffset[k], F.ghostMembers.begin() + F.ghostOffset[k + 1]);
+    }
+  };
   for (int l = 0; l < lp.numOwned; ++l) {
     const long long p = lp.globalId[l];
     S.clear();
-    auto addElement = [&](long long i) {
-      S.push_back(i);
-      for (auto q = d.familyOffset[i]; q < d.familyOffset[i + 1]; ++q) S.push_back(d.familyIndex[q]);
-    };
-    addElement(p);
-    for (auto q = d.familyOffset[p]; q < d.familyOffset[p + 1]; ++q) addElement(d.familyIndex[q]);
+    addElement(l);
+    for (auto q = F.ownedOffset[l]; q < F.ownedOffset[l + 1]; ++q) addElement(F.ownedIndex[q]);
     std::sort(S.begin(), S.end());
     S.erase(std::unique(S.begin(), S.end()), S.end());
     std::vector<GO> gc;

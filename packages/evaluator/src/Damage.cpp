@@ -7,8 +7,8 @@
 namespace perinox {
 
 DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem,
-                                     Model& model, const DofMaps& dofs)
-    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs) {
+                                     Model& model, const DofMaps& dofs, const LocalFamilies& families)
+    : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), families_(families) {
   // Stiffness of frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows are neither
   // negligible nor dominant in the linear solves.
   frozen_.stiffness = problem.material.E * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
@@ -36,8 +36,8 @@ BreakReport DamageBookkeeping::breakMostStretched(const std::vector<double>& u, 
 }
 
 std::vector<std::pair<long long, long long>> DamageBookkeeping::ownedBrokenBonds() const {
-  // The model's owned families start as the discretisation's (Partition.cpp) and only lose bonds.
-  const auto& d = problem_.disc;
+  // The model's owned families start as built (families_) and only lose bonds.
+  const LocalFamilies& F = families_;
   const LocalParticles& lp = model_.particles();
   std::vector<std::pair<long long, long long>> out;
   std::vector<long long> now;
@@ -46,8 +46,10 @@ std::vector<std::pair<long long, long long>> DamageBookkeeping::ownedBrokenBonds
     now.clear();
     for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q) now.push_back(lp.globalId[lp.famIndex[q]]);
     std::sort(now.begin(), now.end());
-    for (auto q = d.familyOffset[g]; q < d.familyOffset[g + 1]; ++q)
-      if (!std::binary_search(now.begin(), now.end(), d.familyIndex[q])) out.emplace_back(g, d.familyIndex[q]);
+    for (auto q = F.ownedOffset[i]; q < F.ownedOffset[i + 1]; ++q) {
+      const long long j = lp.globalId[F.ownedIndex[q]];
+      if (!std::binary_search(now.begin(), now.end(), j)) out.emplace_back(g, j);
+    }
   }
   return out;
 }

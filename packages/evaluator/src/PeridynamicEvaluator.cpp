@@ -32,7 +32,7 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   validateProblem(*problem_);
   const ProblemSpec& P = *problem_;
   owned_ = perinox::ownedParticles(comm_, P.disc, P.partition);
-  LocalParticles lp = localParticles(P.disc, owned_);
+  LocalParticles lp = localParticles(P.disc, owned_, &families_);
   if (!P.modulusScale.empty())
     for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
   model_ = std::make_unique<Model>(P.material, std::move(lp));
@@ -43,8 +43,8 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   if (P.damage) model_->enableDamage(P.damageSpec);
 
   dofs_ = DofMaps(comm_, P, model_->particles());
-  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_);
-  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_);
+  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_, families_);
+  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_, families_);
   buildExternalForce();
   computeRoundoffScale();
   xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(dofs_.ownedFree);

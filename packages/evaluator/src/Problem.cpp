@@ -101,8 +101,11 @@ void validateProblem(const ProblemSpec& P) {
     refuse("disc.horizon = " + number(d.horizon) + " must be finite and at least the spacing disc.dx = " + number(d.dx));
   if (static_cast<long long>(d.volume.size()) != n || static_cast<long long>(d.fictitious.size()) != n)
     refuse("disc.volume and disc.fictitious need one entry per particle (" + std::to_string(n) + ")");
-  if (static_cast<long long>(d.familyOffset.size()) != n + 1)
-    refuse("disc has no families for its particles (call buildFamilies)");
+  // Families are optional (the evaluator then finds those of each rank's particles itself); given,
+  // they must be whole.
+  if (!d.familyOffset.empty() && static_cast<long long>(d.familyOffset.size()) != n + 1)
+    refuse("disc.familyOffset has " + std::to_string(d.familyOffset.size()) + " entries, not one per particle plus one (" +
+           std::to_string(n + 1) + "): call buildFamilies, or leave the families empty");
   for (long long i = 0; i < n; ++i) {
     if (!d.X[i].allFinite()) refuse("disc.X[" + std::to_string(i) + "] is not finite");
     if (!(d.volume[i] > 0) || !std::isfinite(d.volume[i]))

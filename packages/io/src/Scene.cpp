@@ -1132,7 +1132,7 @@ Discretization readLattice(const Section& dl, int dim, double thickness) {
   ls.jitter = dl.ranged<double>("Jitter");
   ls.jitterSeed = static_cast<unsigned>(dl.ranged<int>("Jitter Seed"));
   ls.holes = readHoles(dl, dim);
-  return buildLattice(ls);
+  return buildLattice(ls, false);  // families: each rank finds its own (localParticles)
 }
 
 /// The horizon of a particle file or mesh: Horizon, or Horizon Factor x the spacing, within [1, 50] spacings.
@@ -1156,7 +1156,7 @@ Discretization readParticles(const SceneBuild& b, const Section& dl, double thic
   const double spacing = dl.get<double>("Spacing");
   if (!(spacing > 0)) fail(b.file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
   if (dl.get<double>("Horizon") < 0) fail(b.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-  return readParticleFile(path, b.dim, particleHorizon(dl, spacing, ""), spacing, thickness);
+  return readParticleFile(path, b.dim, particleHorizon(dl, spacing, ""), spacing, thickness, false);
 }
 
 Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
@@ -1174,8 +1174,7 @@ Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
   Discretization& md = b.mesh.disc;
   if (given > 0) md.dx = given;
   md.horizon = particleHorizon(dl, md.dx, given > 0 ? "" : ", the spacing taken from the mesh");
-  buildFamilies(md);
-  return md;
+  return md;  // families: each rank finds its own (localParticles)
 }
 
 void readDiscretization(SceneBuild& b) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 
 namespace perinox {
@@ -28,7 +29,61 @@ long long partitionBegin(long long n, int nranks, int r) {
   return (n * static_cast<long long>(r)) / nranks;
 }
 
-LocalParticles localParticles(const Discretization& d, const std::vector<long long>& owned) {
+namespace {
+
+/// The particles of d within reach of the owned particles' bounding box (ids ascending) with
+/// their families among themselves: complete for every particle within reach - delta of the box.
+struct NearParticles {
+  Discretization d;
+  std::vector<long long> ids;  // global id of each
+  int indexOf(long long g) const {
+    return static_cast<int>(std::lower_bound(ids.begin(), ids.end(), g) - ids.begin());
+  }
+};
+
+NearParticles particlesNear(const Discretization& d, const std::vector<long long>& owned, double reach) {
+  NearParticles n;
+  n.d.dim = d.dim;
+  n.d.dx = d.dx;
+  n.d.horizon = d.horizon;
+  n.d.thickness = d.thickness;
+  if (!owned.empty()) {
+    Vec3 lo = d.X[owned.front()], hi = lo;
+    for (long long i : owned) {
+      lo = lo.cwiseMin(d.X[i]);
+      hi = hi.cwiseMax(d.X[i]);
+    }
+    for (int i = 0; i < d.size(); ++i) {
+      bool inside = true;
+      for (int a = 0; a < d.dim && inside; ++a) inside = d.X[i][a] >= lo[a] - reach && d.X[i][a] <= hi[a] + reach;
+      if (!inside) continue;
+      n.ids.push_back(i);
+      n.d.X.push_back(d.X[i]);
+    }
+  }
+  buildFamilies(n.d);
+  return n;
+}
+
+/// Family of global particle g (ascending global ids): from d's families, or from near's.
+template <class F>
+void forFamily(const Discretization& d, const NearParticles* near, long long g, F&& f) {
+  if (!near) {
+    for (auto q = d.familyOffset[g]; q < d.familyOffset[g + 1]; ++q) f(static_cast<long long>(d.familyIndex[q]));
+    return;
+  }
+  const int k = near->indexOf(g);
+  for (auto q = near->d.familyOffset[k]; q < near->d.familyOffset[k + 1]; ++q) f(near->ids[near->d.familyIndex[q]]);
+}
+
+}  // namespace
+
+LocalParticles localParticles(const Discretization& d, const std::vector<long long>& owned, LocalFamilies* families) {
+  // Without families on d: a neighbour's family reaches two horizons from an owned particle
+  // (margin: buildFamilies' own tolerance is 1e-12 of delta).
+  std::optional<NearParticles> near;
+  if (d.familyOffset.empty()) near = particlesNear(d, owned, 2.0 * d.horizon * (1.0 + 1e-9));
+  const NearParticles* np = near ? &*near : nullptr;
   LocalParticles p;
   p.dim = d.dim;
   p.numOwned = static_cast<int>(owned.size());
@@ -38,8 +93,9 @@ LocalParticles localParticles(const Discretization& d, const std::vector<long lo
   for (int l = 0; l < p.numOwned; ++l) local[owned[l]] = l;
   std::vector<long long> ghosts;
   for (long long i : owned)
-    for (auto q = d.familyOffset[i]; q < d.familyOffset[i + 1]; ++q)
-      if (!local.count(d.familyIndex[q])) ghosts.push_back(d.familyIndex[q]);
+    forFamily(d, np, i, [&](long long j) {
+      if (!local.count(j)) ghosts.push_back(j);
+    });
   std::sort(ghosts.begin(), ghosts.end());
   ghosts.erase(std::unique(ghosts.begin(), ghosts.end()), ghosts.end());
   for (long long g : ghosts) {
@@ -52,8 +108,17 @@ LocalParticles localParticles(const Discretization& d, const std::vector<long lo
   }
   p.famOffset.push_back(0);
   for (long long i : owned) {
-    for (auto q = d.familyOffset[i]; q < d.familyOffset[i + 1]; ++q) p.famIndex.push_back(local.at(d.familyIndex[q]));
+    forFamily(d, np, i, [&](long long j) { p.famIndex.push_back(local.at(j)); });
     p.famOffset.push_back(static_cast<std::int64_t>(p.famIndex.size()));
+  }
+  if (families) {
+    *families = LocalFamilies{};
+    families->ownedOffset = p.famOffset;
+    families->ownedIndex = p.famIndex;
+    for (std::size_t l = owned.size(); l < p.globalId.size(); ++l) {
+      forFamily(d, np, p.globalId[l], [&](long long j) { families->ghostMembers.push_back(j); });
+      families->ghostOffset.push_back(static_cast<std::int64_t>(families->ghostMembers.size()));
+    }
   }
   return p;
 }

@@ -306,7 +306,7 @@ class ShortHorizonSource final : public AuxiliarySource {
     auto P = std::make_shared<ProblemSpec>(ev.problem());
     P->stab = ev.problem().stabilizationSpec();  // the body's micromodulus, not the short horizon's
     P->disc.horizon = factor_ * P->disc.dx;
-    buildFamilies(P->disc);
+    if (!P->disc.familyOffset.empty()) buildFamilies(P->disc);  // else the evaluator finds its own
     auto aux = rcp(new PeridynamicEvaluator(ev.comm(), P));
     if (!aux->ownedFreeMap()->isSameAs(*ev.ownedFreeMap()))
       throw std::logic_error("the short-horizon auxiliary problem has another free-DOF map");

@@ -61,10 +61,11 @@ struct Discretization {
   int familySize(int i) const { return static_cast<int>(familyOffset[i + 1] - familyOffset[i]); }
 };
 
-/// Builds the lattice (real + fictitious particles) and its families.
+/// Builds the lattice (real + fictitious particles) and, unless families is false, its families
+/// (a scene leaves them to the evaluator, which finds each rank's own: localParticles).
 /// Throws std::invalid_argument with a sentence naming the problem (unequal spacing, a
 /// horizon below the spacing, no particle left after holes, ...).
-Discretization buildLattice(const LatticeSpec& spec);
+Discretization buildLattice(const LatticeSpec& spec, bool families = true);
 
 /// The pieces of buildLattice, for building a lattice in parts (one MPI rank's share): sites are
 /// numbered lexicographically (x fastest) over the lattice with its fictitious layers, before
@@ -84,7 +85,7 @@ Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::in
 /// as columns x y z). dx is the nominal spacing (used for reports and horizon factors).
 /// Throws std::runtime_error naming the file and line on malformed input.
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
-                                double thickness);
+                                double thickness, bool families = true);
 
 /// (Re)builds the families of d with a cell-list neighbour search, O(n * family size).
 void buildFamilies(Discretization& d);

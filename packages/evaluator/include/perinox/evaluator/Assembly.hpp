@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "perinox/evaluator/Problem.hpp"
+#include "perinox/model/Partition.hpp"
 
 namespace perinox {
 
@@ -71,7 +72,7 @@ struct FrozenDofs {
 class Assembler {
  public:
   Assembler(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem, const Model& model,
-            const DofMaps& dofs);
+            const DofMaps& dofs, const LocalFamilies& families);
   /// The graphs, built on first use.
   const JacobianGraphs& graphs(bool neighbours) const;
   /// The internal force on every owned DOF (owned particles * dim) at the local displacements u;
@@ -90,6 +91,7 @@ class Assembler {
   const ProblemSpec& problem_;
   const Model& model_;
   const DofMaps& dofs_;
+  const LocalFamilies& families_;
   mutable JacobianGraphs full_, nbr_;
   mutable Teuchos::RCP<TVector> jvOverlap_, jvOwned_;
 };

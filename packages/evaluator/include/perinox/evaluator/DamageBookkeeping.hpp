@@ -21,7 +21,7 @@ struct BreakReport {
 class DamageBookkeeping {
  public:
   DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm, const ProblemSpec& problem, Model& model,
-                    const DofMaps& dofs);
+                    const DofMaps& dofs, const LocalFamilies& families);
   /// After a converged step at the local displacements u (xFree: the owned free DOFs of the same
   /// state): breaks every bond with s >= s_cr, then detaches (isolates and freezes) every particle
   /// left with a singular shape tensor, repeating until none is, and every particle of a
@@ -52,6 +52,7 @@ class DamageBookkeeping {
   const ProblemSpec& problem_;
   Model& model_;
   const DofMaps& dofs_;
+  const LocalFamilies& families_;
   std::vector<long long> detachedAll_;
   FrozenDofs frozen_;
 };

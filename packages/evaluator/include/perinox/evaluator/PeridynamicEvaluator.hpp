@@ -168,6 +168,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   std::shared_ptr<const ProblemSpec> problem_;
   std::unique_ptr<Model> model_;
   std::vector<long long> owned_;  // owned particles' global ids, sorted
+  LocalFamilies families_;        // the local families as built (graph, broken bonds)
   mutable double lambda_ = 0.0;  // the current load factor (an evaluation with p(0) sets it)
   DofMaps dofs_;
   std::unique_ptr<Assembler> assembler_;
