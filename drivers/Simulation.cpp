@@ -89,10 +89,24 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, mine, most);
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, 3, mine, least);
   Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, 3, mine, sum);
+  // Family entries the rank holds (the model's, the families as built, and any global family
+  // array of the discretisation: none in a scene's run), against its share: at most twice the
+  // owned and ghost particles times the largest family, whatever the body's size.
+  const LocalFamilies& F = ev.localFamilies();
+  const long long global = static_cast<long long>(ev.problem().disc.familyIndex.size());
+  const long long held = global + static_cast<long long>(lp.famIndex.size() + F.ownedIndex.size() + F.ghostMembers.size());
+  long long largest = 0;
+  for (int l = 0; l < lp.numOwned; ++l) largest = std::max<long long>(largest, F.ownedOffset[l + 1] - F.ownedOffset[l]);
+  for (std::size_t k = 0; k + 1 < F.ghostOffset.size(); ++k) largest = std::max<long long>(largest, F.ghostOffset[k + 1] - F.ghostOffset[k]);
+  const long long counts[3] = {global, held, held <= 2 * static_cast<long long>(lp.size()) * largest ? 0 : 1};
+  long long countsMax[3];
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, counts, countsMax);
   facts.partition = {{"method", partitionName(ev.problem().partition)},
                      {"owned_max", most[0]}, {"owned_min", least[0]},
                      {"ghosts_max", most[1]}, {"ghosts_min", least[1]}, {"ghosts_mean", sum[1] / comm.getSize()},
-                     {"peak_rss_mib_min_rank", least[2]}};
+                     {"peak_rss_mib_min_rank", least[2]},
+                     {"global_family_entries_max", countsMax[0]}, {"family_entries_max", countsMax[1]},
+                     {"ranks_beyond_family_share", countsMax[2]}};
 }
 
 /// The scene's Newton controls.

@@ -156,6 +156,11 @@ def main():
             fail("a rank owned no particles")
         if (s["ranks"] > 1) != (part.get("ghosts_max", 0) > 0):
             fail(f"{part.get('ghosts_max')} ghosts on {s['ranks']} ranks")
+        # No rank holds a family array of the whole body, and each holds at most its share.
+        if part.get("global_family_entries_max", -1) != 0:
+            fail(f"a rank holds {part.get('global_family_entries_max')} entries of the whole body's families")
+        if part.get("ranks_beyond_family_share", -1) != 0:
+            fail("a rank holds more family entries than twice its owned and ghost particles times the largest family")
     if a.work_counts:
         with open(os.path.join(a.out, "summary.json")) as f:
             s = json.load(f)

@@ -138,6 +138,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
 
   const ProblemSpec& problem() const { return *problem_; }
   const Model& model() const { return *model_; }
+  /// The rank's families as built (owned in local ids, ghosts' in global ids; Partition.hpp).
+  const LocalFamilies& localFamilies() const { return families_; }
   /// The particles this rank owns (global ids, sorted; `Discretization/Partition` chose them).
   /// The owned arrays of this class (displacements, outputs, damage) are in this order.
   const std::vector<long long>& ownedParticles() const { return owned_; }
