@@ -21,7 +21,7 @@ endif()
 # that the scenes' relative 'Mesh File' and 'Particle File' paths resolve.
 set(EXO_DIR ${CMAKE_CURRENT_BINARY_DIR}/exodus_meshes)
 file(MAKE_DIRECTORY ${EXO_DIR})
-foreach(scene bar_exodus bar_points quad_exodus quad_points)
+foreach(scene bar_exodus bar_points quad_exodus quad_points bimaterial_bar_exodus)
   configure_file(${CMAKE_CURRENT_SOURCE_DIR}/exodus/${scene}.xml ${EXO_DIR}/${scene}.xml COPYONLY)
 endforeach()
 add_executable(make_exodus_meshes exodus/make_exodus_meshes.cpp)
@@ -196,3 +196,25 @@ set_property(TEST exodus_roundtrip_bar APPEND PROPERTY FIXTURES_REQUIRED exodus_
 add_test(NAME exodus_roundtrip_bar_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_bar_np1 ${PERINOX_TEST_OUT}/exodus_roundtrip_bar)
 set_tests_properties(exodus_roundtrip_bar_compare PROPERTIES LABELS unit FIXTURES_REQUIRED "exodus_bar_np1;exodus_roundtrip_bar")
+
+# Blocks with their own materials from a mesh: the two-material bar (tests/exodus/
+# bimaterial_bar_exodus.xml, blocks by Name and Id) on 1 and 3 ranks against the closed form of
+# two bars in series (tests/check_blocks_bar.py). Measured on 1 rank (40 x 4 x 4 hexahedra,
+# delta = 2.015 h = 0.1, four particles across, so every particle is within a horizon of a
+# lateral face): block strains +5.2e-3 and +5.0e-3 of R / (E_k A) (bound 1e-2), interface
+# displacement +2.6e-3 (bound 1e-2), reaction -6.3 % (bound 10 %: the grips' boundary layer, delta
+# / L = 0.06 here); the 3-rank run equals the 1-rank one to 1e-10.
+foreach(np 1 3)
+  perinox_exodus_run(NAME blocks_exodus_bar_np${np} SCENE bimaterial_bar_exodus.xml NP ${np})
+  add_test(NAME blocks_exodus_bar_np${np}_closed_form COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_blocks_bar.py
+    ${PERINOX_TEST_OUT}/blocks_exodus_bar_np${np} --U 0.001 --A 0.04 --E1 1e9 --E2 4e9 --L1 0.8 --L2 0.8
+    --probes a1=0.325 b1=0.675 a2=1.325 b2=1.675 --strain-rtol 1e-2 --interface-rtol 1e-2 --reaction-rtol 0.1)
+  set_tests_properties(blocks_exodus_bar_np${np}_closed_form PROPERTIES LABELS "unit;verification" FIXTURES_REQUIRED blocks_exodus_bar_np${np})
+endforeach()
+add_test(NAME blocks_exodus_bar_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np3)
+set_tests_properties(blocks_exodus_bar_ranks_compare PROPERTIES LABELS mpi FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_np3")
+perinox_bad_mesh(blocks_exodus_name_unknown bimaterial_bar_exodus.xml "block 'soft': the mesh has no element block named 'middle'"
+  --set "Blocks/soft/Name=middle")
+perinox_bad_mesh(blocks_exodus_box bimaterial_bar_exodus.xml "'Blocks/stiff/Box Min' is for lattices"
+  --set "Blocks/stiff/Box Min={1, 0, 0}" --set "Blocks/stiff/Box Max={2, 1, 1}")
