@@ -304,8 +304,8 @@ ParameterList probeTemplate() {
 }
 
 void materialKeys(ParameterList& m, const std::string& lead = "") {
-  setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}}, lead);
-  setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, lead + "2D: ");
+  setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}}, lead.empty() ? "" : lead + "model: ");
+  setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, lead.empty() ? "2D: " : lead + "plane (2D): ");
   setNumber(m, "Young's Modulus", 0.0, lead + "E, in the scene's stress units", positive());
   setNumber(m, "Poisson's Ratio", 0.0, lead + "nu", reals(End::Open, -1, 0.5, End::Open, "nu = 0.5 is incompressible: the Lame constant lambda is infinite"));
 }
@@ -316,7 +316,7 @@ void damageLawKeys(ParameterList& dm, const std::string& lead = "") {
   setNumber(dm, "Beta", 3.0, lead + "steepness of the tanh softening", positive());
   setChoice<DamageSpec::Softening>(dm, "Softening", "Paper",
             {{"Paper", DamageSpec::Softening::Paper, "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
-             {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}}, lead);
+             {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}}, lead.empty() ? "" : lead + "softening: ");
 }
 
 /// One entry of Blocks: a block's own material, G and damage law (each key not given takes the
