@@ -9,6 +9,7 @@
 #include <Tpetra_Core.hpp>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 
@@ -20,7 +21,9 @@ using TOE = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, Node>;
 
 namespace {
 
-std::shared_ptr<ProblemSpec> makeProblem(int dim, double factor, double G, bool fictitious) {
+/// With blocks: block 2 (x beyond the middle) with its own material (E x 4, nu 0.2) and G / 2;
+/// the stabilisation's C then comes from each block's material.
+std::shared_ptr<ProblemSpec> makeProblem(int dim, double factor, double G, bool fictitious, bool blocks = false) {
   auto P = std::make_shared<ProblemSpec>();
   LatticeSpec s;
   s.dim = dim;
@@ -38,6 +41,20 @@ std::shared_ptr<ProblemSpec> makeProblem(int dim, double factor, double G, bool 
   if (G > 0) {
     P->stabilization = true;
     P->stab = {G, micromodulusC(P->material, P->disc.horizon, P->disc.thickness)};
+  }
+  if (blocks) {
+    BlockSpec b1, b2;
+    b1.id = 1;
+    b1.material = P->material;
+    b2.id = 2;
+    b2.material = P->material;
+    b2.material.E *= 4;
+    b2.material.nu = 0.2;
+    if (G > 0) b2.G = 0.5 * G;
+    P->blocks = {b1, b2};
+    P->stab.C = StabilizationSpec::kFromMaterial;
+    const double mid = 0.5 * (P->disc.boxLower[0] + P->disc.boxUpper[0]);
+    for (int p = 0; p < P->disc.size(); ++p) P->disc.block[p] = P->disc.X[p][0] > mid ? 2 : 1;
   }
   const int np = P->disc.size();
   P->fixedMask.assign(np, 0);
@@ -69,6 +86,7 @@ struct Case {
   double factor;
   double G;
   bool fictitious;
+  bool blocks = false;
 };
 
 class EvaluatorFD : public ::testing::TestWithParam<Case> {};
@@ -81,7 +99,7 @@ class EvaluatorFD : public ::testing::TestWithParam<Case> {};
 TEST_P(EvaluatorFD, JacobianMatchesDirectionalDifferencesAndIsSymmetric) {
   const Case c = GetParam();
   auto comm = Teuchos::DefaultComm<int>::getComm();
-  auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, makeProblem(c.dim, c.factor, c.G, c.fictitious)));
+  auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, makeProblem(c.dim, c.factor, c.G, c.fictitious, c.blocks)));
   ev->setLoadFactor(0.7);
   auto space = ev->get_x_space();
   auto x = Thyra::createMember(space), v = Thyra::createMember(space), w = Thyra::createMember(space);
@@ -125,7 +143,8 @@ TEST_P(EvaluatorFD, JacobianMatchesDirectionalDifferencesAndIsSymmetric) {
 
 INSTANTIATE_TEST_SUITE_P(Cases, EvaluatorFD,
                          ::testing::Values(Case{2, 1.015, 0, false}, Case{2, 2.015, 0, true}, Case{2, 3.015, 0.2, true},
-                                           Case{3, 1.015, 0, true}, Case{3, 2.015, 0.5, false}));
+                                           Case{3, 1.015, 0, true}, Case{3, 2.015, 0.5, false},
+                                           Case{2, 2.015, 0.2, true, true}, Case{3, 2.015, 0.5, false, true}));
 
 // The matrix-free operators through the Thyra interface, on 1-3 ranks: the analytic product
 // equals the assembled W times v to round-off (1e-12: both are exact derivatives, summed in a
@@ -136,9 +155,10 @@ INSTANTIATE_TEST_SUITE_P(Cases, EvaluatorFD,
 TEST_P(EvaluatorFD, MatrixFreeProductsMatchAssembledJacobian) {
   const Case c = GetParam();
   auto comm = Teuchos::DefaultComm<int>::getComm();
-  auto problem = makeProblem(c.dim, c.factor, c.G, c.fictitious);
+  auto problem = makeProblem(c.dim, c.factor, c.G, c.fictitious, c.blocks);
   problem->damage = c.G > 0;  // with stabilisation cases, soften bonds too
   problem->damageSpec = DamageSpec{0.004, 0.02, 3.0};
+  if (c.blocks && problem->damage) problem->blocks[1].damage = DamageSpec{0.003, 0.015, 2.0, DamageSpec::Softening::Continuous};
   auto assembled = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
   auto space = assembled->get_x_space();
   auto x = Thyra::createMember(space), v = Thyra::createMember(space);
@@ -267,6 +287,34 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
 // C = 12 k' / (pi t delta^4) (plane strain, k' = E / (2 (1 - nu - 2 nu^2)); Silling 2017), and the
 // same residual, bit for bit, as one that gives that C by hand. A C out of range, and a bad G, are
 // refused with one sentence.
+// Blocks in a hand-built problem: each refusal one sentence naming the field.
+TEST(ProblemValidation, BlocksAreCheckedByName) {
+  auto comm = Teuchos::DefaultComm<int>::getComm();
+  auto refused = [&](const std::function<void(ProblemSpec&)>& edit, const std::string& part) {
+    auto P = makeProblem(2, 2.015, 0.1, false, true);
+    edit(*P);
+    try {
+      PeridynamicEvaluator ev(comm, P);
+      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(part), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  };
+  refused([](ProblemSpec& P) { P.blocks[1].id = 1; }, "ProblemSpec: blocks[1] (block 1) repeats block id 1");
+  refused([](ProblemSpec& P) { P.disc.block[0] = 9; }, "ProblemSpec: particle 0 is in block 9, which has no entry in blocks");
+  refused([](ProblemSpec& P) { P.blocks.push_back(P.blocks[0]), P.blocks.back().id = 5; }, "blocks[2] names block 5, which has no particle");
+  refused([](ProblemSpec& P) { P.blocks[1].material.nu = 0.5; }, "blocks[1] (block 2).material.nu = 0.5 must satisfy -1 < nu < 0.5");
+  refused([](ProblemSpec& P) { P.blocks[1].material.E = 0; }, "blocks[1] (block 2).material.E = 0 must be a positive finite number");
+  refused([](ProblemSpec& P) { P.blocks[0].material.dim = 3; }, "blocks[0] (block 1).material.dim = 3 differs from disc.dim = 2");
+  refused([](ProblemSpec& P) { P.blocks[1].G = -1.0; }, "blocks[1] (block 2).G = -1 must be finite and >= 0");
+  refused([](ProblemSpec& P) { P.stabilization = false; }, "blocks[1] (block 2).G = 0.05 is given but stabilization is off");
+  refused([](ProblemSpec& P) { P.blocks[1].damage = DamageSpec{}; }, "blocks[1] (block 2).damage is given but damage is off");
+  refused([](ProblemSpec& P) { P.damage = true, P.blocks[1].damage = DamageSpec{0.01, 0.005, 3.0}; }, "blocks[1] (block 2).damage needs 0 < sMin < sCr");
+  refused([](ProblemSpec& P) { P.stab.C = 5.0; }, "stab.C is set, but with blocks each block's C applies");
+}
+
 TEST(ProblemValidation, StabilizationConstantIsComputedByTheLibrary) {
   auto comm = Teuchos::DefaultComm<int>::getComm();
   auto given = makeProblem(2, 3.015, 0.1, false);  // C = micromodulusC(...), set by hand

@@ -11,7 +11,10 @@ What is translated (docs/exodus.md, "Bringing a Peridigm model"):
                                                         finite deformation); Hourglass Coefficient
                                                         -> Silling stabilisation with G = that value
                                                         (a related control, not Peridigm's)
-  Blocks          one Horizon for all blocks (one material) -> Discretization/Horizon
+  Blocks          one Horizon for all blocks -> Discretization/Horizon; with several materials,
+                  each block_N of a Peridigm block's Block Names -> a scene Blocks entry (Id N) with
+                  its material's E, nu and hourglass G (the first block's material is the
+                  top-level Material)
   Boundary Conditions  "Prescribed Displacement" on a Node Set, Coordinate x|y|z, Value an
                   expression of x, y, z, t equal to t (a + b x + c y + d z)
                                                      -> a Node Set region (Peridigm's node-set rule
@@ -21,7 +24,7 @@ What is translated (docs/exodus.md, "Bringing a Peridigm model"):
   Compute Class Parameters  Nearest_Point_Data of Displacement -> a Nearest region + Displacement probe;
                   Block_Data of Force, Sum over block_N -> a Block region (Id N) + Reaction probe
   Output          -> Output/Format Exodus
-Anything else (another material model, damage, several materials or horizons, other condition
+Anything else (another material model, damage, several horizons, other condition
 types, expressions that are not of that form, Final Time other than 1) is refused with one
 sentence on stderr and exit code 2: the scene would not be the same model.
 """
@@ -96,23 +99,34 @@ def main():
     mesh_rel = os.path.relpath(mesh, os.path.dirname(os.path.abspath(out)))
 
     mats = p.get("Materials", {})
-    if len(mats) != 1:
-        refuse(deck, f"has {len(mats)} materials; perinox scenes have one material (per-block materials are not done yet)")
-    (mname, m), = mats.items()
-    if m.get("Material Model") != "Elastic Correspondence":
-        refuse(deck, f"material '{mname}' is '{m.get('Material Model')}'; only Elastic Correspondence is translated")
-    K, G = float(m["Bulk Modulus"]), float(m["Shear Modulus"])
-    E = 9 * K * G / (3 * K + G)
-    nu = (3 * K - 2 * G) / (2 * (3 * K + G))
-    hourglass = float(m.get("Hourglass Coefficient", 0.0))
+    if not mats:
+        refuse(deck, "has no materials")
+    constants = {}  # material name -> (E, nu, hourglass)
+    for mname, m in mats.items():
+        if m.get("Material Model") != "Elastic Correspondence":
+            refuse(deck, f"material '{mname}' is '{m.get('Material Model')}'; only Elastic Correspondence is translated")
+        K, G = float(m["Bulk Modulus"]), float(m["Shear Modulus"])
+        constants[mname] = (9 * K * G / (3 * K + G), (3 * K - 2 * G) / (2 * (3 * K + G)), float(m.get("Hourglass Coefficient", 0.0)))
 
     blocks = p.get("Blocks", {})
     horizons = {float(b["Horizon"]) for b in blocks.values()}
     if len(horizons) != 1:
         refuse(deck, "blocks have different horizons (or none); perinox uses one horizon")
-    if any(b.get("Material") != mname for b in blocks.values()):
-        refuse(deck, "a block names another material")
+    for bname, b in blocks.items():
+        if b.get("Material") not in constants:
+            refuse(deck, f"block '{bname}' names material '{b.get('Material')}', which the deck does not define")
     horizon = horizons.pop()
+    first = next(iter(blocks.values()))["Material"] if blocks else next(iter(constants))
+    E, nu, hourglass = constants[first]
+    K, G = float(mats[first]["Bulk Modulus"]), float(mats[first]["Shear Modulus"])
+    # Several materials: one scene Blocks entry per Peridigm block_N, with its material's constants.
+    per_block = []
+    if len({b["Material"] for b in blocks.values()}) > 1:
+        for bname, b in blocks.items():
+            for n in str(b.get("Block Names", "")).split():
+                if not n.startswith("block_") or not n[6:].isdigit():
+                    refuse(deck, f"block '{bname}' lists '{n}'; only Peridigm's 'block_<id>' names are translated")
+                per_block.append((n, int(n[6:]), b["Material"]) + constants[b["Material"]])
     if "Damage Models" in p or any("Damage Model" in b for b in blocks.values()):
         refuse(deck, "has damage models; they are not translated")
 
@@ -171,9 +185,18 @@ def main():
          "    " + par("Model", "string", "Hencky" if a.hencky else "Small Strain"),
          "    " + par("Young's Modulus", "double", repr(E)), "    " + par("Poisson's Ratio", "double", repr(nu)),
          "  </ParameterList>"]
-    if hourglass > 0:
+    if hourglass > 0 or any(hg > 0 for *_, hg in per_block):
         L += ['  <ParameterList name="Model">', "    " + par("Stabilization", "string", "Silling"),
               "    " + par("G", "double", repr(hourglass)), "  </ParameterList>"]
+    if per_block:
+        L.append('  <ParameterList name="Blocks">')
+        for n, bid, mname, bE, bnu, bhg in per_block:
+            L += [f"    <ParameterList name={q(n)}>{par('Id', 'int', bid)}<!-- {su.escape(mname)} -->",
+                  '      <ParameterList name="Material">' + par("Young's Modulus", "double", repr(bE)) +
+                  par("Poisson's Ratio", "double", repr(bnu)) + "</ParameterList>",
+                  '      <ParameterList name="Stabilization">' + par("G", "double", repr(bhg)) + "</ParameterList>",
+                  "    </ParameterList>"]
+        L.append("  </ParameterList>")
     L.append('  <ParameterList name="Regions">')
     for rn, typ, (k, t, v) in regions:
         L.append(f"    <ParameterList name={q(rn)}>{par('Type', 'string', typ)}{par(k, t, v)}</ParameterList>")
@@ -193,7 +216,7 @@ def main():
     with open(out, "w") as f:
         f.write("\n".join(L) + "\n")
     print(f"wrote {out}: {len(regions)} regions, {len(conditions)} conditions, {len(probes)} probes, "
-          f"E = {E:.6g}, nu = {nu:.6g}, horizon {horizon}")
+          f"E = {E:.6g}, nu = {nu:.6g}, horizon {horizon}" + (f", {len(per_block)} blocks with their own materials" if per_block else ""))
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ endif()
 # that the scenes' relative 'Mesh File' and 'Particle File' paths resolve.
 set(EXO_DIR ${CMAKE_CURRENT_BINARY_DIR}/exodus_meshes)
 file(MAKE_DIRECTORY ${EXO_DIR})
-foreach(scene bar_exodus bar_points quad_exodus quad_points)
+foreach(scene bar_exodus bar_points quad_exodus quad_points bimaterial_bar_exodus)
   configure_file(${CMAKE_CURRENT_SOURCE_DIR}/exodus/${scene}.xml ${EXO_DIR}/${scene}.xml COPYONLY)
 endforeach()
 add_executable(make_exodus_meshes exodus/make_exodus_meshes.cpp)
@@ -142,24 +142,32 @@ set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQ
 # Complete or absent: a bad mesh with Exodus output writes nothing.
 perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
 
-# tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers, and
-# perinox accepts all of it (mesh, node sets, conditions, the rigid-body check: the scene is built
-# before the run starts), stopping before any solve at a --restart folder that does not exist;
-# a deck it cannot translate is refused with one sentence.
+# perinox_peridigm_scene(NAME DECK SCENE): tools_peridigm_NAME translates DECK into SCENE, and
+# tools_peridigm_NAME_accepted has perinox build all of it (mesh, node sets, conditions, blocks, the
+# rigid-body check), stopping before any solve at a --restart folder that does not exist.
+function(perinox_peridigm_scene name deck scene)
+  add_test(NAME tools_peridigm_${name} COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py ${deck} --out ${scene})
+  set_tests_properties(tools_peridigm_${name} PROPERTIES LABELS unit FIXTURES_SETUP peridigm_${name})
+  perinox_mpi_command(mpi1 1)
+  add_test(NAME tools_peridigm_${name}_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_${name}
+    --exit-code 2 --message "no state.json there (not a checkpoint)" --no-output --
+    ${mpi1} $<TARGET_FILE:perinox> run ${scene} --restart ${CMAKE_CURRENT_BINARY_DIR}/peridigm/no-such-checkpoint
+    --output ${PERINOX_TEST_OUT}/peridigm_${name})
+  set_tests_properties(tools_peridigm_${name}_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
+    FIXTURES_REQUIRED peridigm_${name})
+endfunction()
+# tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers and
+# perinox accepts it; a deck with two materials (tests/exodus/two_material_deck.yaml: the tensile
+# test with a stiffer gauge block) becomes a scene with Blocks, accepted too; a deck it cannot
+# translate is refused with one sentence.
 if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
   set(PD_SCENE ${CMAKE_CURRENT_BINARY_DIR}/peridigm/tensile_test.xml)
-  add_test(NAME tools_peridigm_to_scene COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py
-    ${PERINOX_TENSILE_DIR}/tensile_test.yaml --out ${PD_SCENE})
-  set_tests_properties(tools_peridigm_to_scene PROPERTIES LABELS unit FIXTURES_SETUP peridigm_scene)
+  perinox_peridigm_scene(to_scene ${PERINOX_TENSILE_DIR}/tensile_test.yaml ${PD_SCENE})
   add_test(NAME tools_peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
-  set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_scene)
-  perinox_mpi_command(mpi1 1)
-  add_test(NAME tools_peridigm_scene_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_scene
-    --exit-code 2 --message "no state.json there (not a checkpoint)" --no-output --
-    ${mpi1} $<TARGET_FILE:perinox> run ${PD_SCENE} --restart ${CMAKE_CURRENT_BINARY_DIR}/peridigm/no-such-checkpoint
-    --output ${PERINOX_TEST_OUT}/peridigm_scene)
-  set_tests_properties(tools_peridigm_scene_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
-    FIXTURES_REQUIRED peridigm_scene)
+  set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_to_scene)
+  perinox_peridigm_scene(two_materials ${CMAKE_CURRENT_SOURCE_DIR}/exodus/two_material_deck.yaml
+    ${CMAKE_CURRENT_BINARY_DIR}/peridigm/two_material_deck.xml)
+  set_tests_properties(tools_peridigm_two_materials PROPERTIES PASS_REGULAR_EXPRESSION "3 blocks with their own materials")
 endif()
 add_test(NAME tools_peridigm_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
   "is not of the form t (a + b x + c y + d z)" --
@@ -196,3 +204,26 @@ set_property(TEST exodus_roundtrip_bar APPEND PROPERTY FIXTURES_REQUIRED exodus_
 add_test(NAME exodus_roundtrip_bar_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_bar_np1 ${PERINOX_TEST_OUT}/exodus_roundtrip_bar)
 set_tests_properties(exodus_roundtrip_bar_compare PROPERTIES LABELS unit FIXTURES_REQUIRED "exodus_bar_np1;exodus_roundtrip_bar")
+
+# Blocks with their own materials from a mesh: the two-material bar (tests/exodus/
+# bimaterial_bar_exodus.xml, blocks by Name and Id) on 1 and 3 ranks against the closed form of
+# two bars in series (tests/check_blocks_bar.py). Measured on 1 rank (40 x 4 x 4 hexahedra,
+# delta = 2.015 h = 0.1, four particles across, so every particle is within a horizon of a
+# lateral face; probes 2.25 horizons from the grips and the interface): block strains -1.8e-4 and
+# +4.3e-3 of R / (E_k A) (bound 1e-2), interface
+# displacement +2.6e-3 (bound 1e-2), reaction -6.3 % (bound 10 %: the grips' boundary layer, delta
+# / L = 0.06 here); the 3-rank run equals the 1-rank one to 1e-10.
+foreach(np 1 3)
+  perinox_exodus_run(NAME blocks_exodus_bar_np${np} SCENE bimaterial_bar_exodus.xml NP ${np})
+  add_test(NAME blocks_exodus_bar_np${np}_closed_form COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_blocks_bar.py
+    ${PERINOX_TEST_OUT}/blocks_exodus_bar_np${np} --U 0.001 --A 0.04 --E1 1e9 --E2 4e9 --L1 0.8 --L2 0.8
+    --probes a1=0.425 b1=0.775 a2=1.225 b2=1.575 --strain-rtol 1e-2 --interface-rtol 1e-2 --reaction-rtol 0.1)
+  set_tests_properties(blocks_exodus_bar_np${np}_closed_form PROPERTIES LABELS "unit;verification" FIXTURES_REQUIRED blocks_exodus_bar_np${np})
+endforeach()
+add_test(NAME blocks_exodus_bar_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np3)
+set_tests_properties(blocks_exodus_bar_ranks_compare PROPERTIES LABELS mpi FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_np3")
+perinox_bad_mesh(blocks_exodus_name_unknown bimaterial_bar_exodus.xml "block 'soft': the mesh has no element block named 'middle'"
+  --set "Blocks/soft/Name=middle")
+perinox_bad_mesh(blocks_exodus_box bimaterial_bar_exodus.xml "'Blocks/stiff/Box Min' is for lattices"
+  --set "Blocks/stiff/Box Min={1, 0, 0}" --set "Blocks/stiff/Box Max={2, 1, 1}")

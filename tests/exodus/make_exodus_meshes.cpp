@@ -6,6 +6,7 @@
 //                           not by the reader
 //   quad.e, quad_points.txt a 2D plate of quads, the same for a 2D scene (volume h^2 x 0.5, the
 //                           scene's thickness)
+//   bimaterial_bar.e        a 40 x 4 x 4 hex bar in two blocks, for the two-material bar
 //   inverted.e, flat_tet.e, pyramid.e, no_blocks.e, sphere_no_volume.e, not_exodus.e
 //                           meshes the reader must refuse
 //   usage: make_exodus_meshes DIR
@@ -69,6 +70,9 @@ int main(int argc, char** argv) {
       m.nodeSets = {left, right};
       exotest::write(dir + "/quad.e", m);
     }
+    // The two-material bar of blocks_exodus_bar (tests/exodus/bimaterial_bar_exodus.xml): 40 x 4 x 4
+    // hexahedra of edge 0.05 (L = 2, section 0.2 x 0.2), blocks 1 ('left part', x < 1) and 2.
+    exotest::write(dir + "/bimaterial_bar.e", exotest::hexBox(40, 4, 4, 0.05, 20));
     exotest::write(dir + "/inverted.e", exotest::invertedHex());
     exotest::write(dir + "/flat_tet.e", exotest::flatTet());
     exotest::write(dir + "/pyramid.e", exotest::pyramid());

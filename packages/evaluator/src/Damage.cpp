@@ -11,7 +11,7 @@ DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm
     : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), families_(families) {
   // Stiffness of frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows are neither
   // negligible nor dominant in the linear solves.
-  frozen_.stiffness = problem.material.E * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
+  frozen_.stiffness = problem.stiffestModulus() * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
 }
 
 BreakReport DamageBookkeeping::breakBonds(const std::vector<double>& u, const double* xFree) {

@@ -35,12 +35,29 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   LocalParticles lp = localParticles(P.disc, owned_, &families_);
   if (!P.modulusScale.empty())
     for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
-  model_ = std::make_unique<Model>(P.material, std::move(lp));
+  if (P.blocks.empty()) {
+    model_ = std::make_unique<Model>(P.material, std::move(lp));
+  } else {  // blocks: each local particle's index into the table of the blocks' materials
+    const std::vector<int> index = P.blockIndex();
+    for (long long g : lp.globalId) lp.material.push_back(index[g]);
+    model_ = std::make_unique<Model>(P.materials(), std::move(lp));
+  }
   if (P.stressPoints) model_->enableStressPoints(P.stressPointSeed);
   else if (P.correspondence) model_->enableCorrespondence();
   if (P.control) model_->enableControl(P.controlSpec);
-  if (P.stabilization) model_->enableStabilization(P.stabilizationSpec());
-  if (P.damage) model_->enableDamage(P.damageSpec);
+  if (P.blocks.empty()) {
+    if (P.stabilization) model_->enableStabilization(P.stabilizationSpec());
+    if (P.damage) model_->enableDamage(P.damageSpec);
+  } else {
+    std::vector<StabilizationSpec> stab;
+    std::vector<DamageSpec> laws;
+    for (const BlockSpec& blk : P.blocks) {
+      stab.push_back(P.stabilizationSpec(blk));
+      laws.push_back(blk.damage ? *blk.damage : P.damageSpec);
+    }
+    if (P.stabilization) model_->enableStabilization(stab);
+    if (P.damage) model_->enableDamage(laws);
+  }
 
   dofs_ = DofMaps(comm_, P, model_->particles());
   assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_, families_);
@@ -91,7 +108,7 @@ void PeridynamicEvaluator::computeRoundoffScale() {
     for (int c = 0; c < D; ++c)
       if (dofs_.overlapFreeLid[l * D + c] >= 0) s2 += wd[l * D + c] * wd[l * D + c];
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, s2, Teuchos::outArg(g2));
-  roundoffScale_ = std::numeric_limits<double>::epsilon() * problem_->material.E * std::sqrt(g2);
+  roundoffScale_ = std::numeric_limits<double>::epsilon() * problem_->stiffestModulus() * std::sqrt(g2);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <map>
+#include <set>
 #include <stdexcept>
 
 #include "perinox/evaluator/Problem.hpp"
@@ -31,12 +33,87 @@ void positive(double v, const char* name) {
   if (!(v > 0) || !std::isfinite(v)) refuse(std::string(name) + " = " + number(v) + " must be a positive finite number");
 }
 
+void damageLaw(const DamageSpec& s, const std::string& name) {
+  if (!(s.sMin > 0 && s.sMin < s.sCr) || !std::isfinite(s.sCr))
+    refuse(name + " needs 0 < sMin < sCr (sMin = " + number(s.sMin) + ", sCr = " + number(s.sCr) + ")");
+  if (!(s.beta > 0) || !std::isfinite(s.beta)) refuse(name + ".beta = " + number(s.beta) + " must be a positive finite number");
+}
+
+/// blocks: ids unique, every particle's block given, each block's constants valid.
+void validateBlocks(const ProblemSpec& P) {
+  std::set<int> ids;
+  for (std::size_t k = 0; k < P.blocks.size(); ++k) {
+    const BlockSpec& b = P.blocks[k];
+    const std::string name = "blocks[" + std::to_string(k) + "] (block " + std::to_string(b.id) + ")";
+    if (!ids.insert(b.id).second) refuse(name + " repeats block id " + std::to_string(b.id) + "; each block needs one entry");
+    if (b.material.dim != P.disc.dim)
+      refuse(name + ".material.dim = " + std::to_string(b.material.dim) + " differs from disc.dim = " + std::to_string(P.disc.dim));
+    if (!(b.material.E > 0) || !std::isfinite(b.material.E))
+      refuse(name + ".material.E = " + number(b.material.E) + " must be a positive finite number");
+    if (!(b.material.nu > -1.0 && b.material.nu < 0.5))
+      refuse(name + ".material.nu = " + number(b.material.nu) + " must satisfy -1 < nu < 0.5");
+    if (P.disc.dim == 2 && b.material.planar == PlanarMode::None)
+      refuse(name + ".material.planar must be PlaneStrain or PlaneStress in 2D");
+    if (b.G && (!std::isfinite(*b.G) || *b.G < 0)) refuse(name + ".G = " + number(*b.G) + " must be finite and >= 0");
+    if (b.G && *b.G > 0 && !P.stabilization)
+      refuse(name + ".G = " + number(*b.G) + " is given but stabilization is off; set stabilization = true");
+    if (b.C != StabilizationSpec::kFromMaterial && (!std::isfinite(b.C) || b.C < 0))
+      refuse(name + ".C = " + number(b.C) + " must be finite and >= 0, or left at its default");
+    if (b.damage) {
+      if (!P.damage) refuse(name + ".damage is given but damage is off; set damage = true");
+      damageLaw(*b.damage, name + ".damage");
+    }
+  }
+  if (P.stabilization && P.stab.C != StabilizationSpec::kFromMaterial)
+    refuse("stab.C is set, but with blocks each block's C applies (BlockSpec::C); leave stab.C at its default");
+  std::vector<long long> count(P.blocks.size(), 0);
+  for (int k : P.blockIndex()) ++count[k];  // throws for a particle whose block has no entry
+  for (std::size_t k = 0; k < P.blocks.size(); ++k)
+    if (count[k] == 0) refuse("blocks[" + std::to_string(k) + "] names block " + std::to_string(P.blocks[k].id) + ", which has no particle");
+}
+
 }  // namespace
 
 StabilizationSpec ProblemSpec::stabilizationSpec() const {
   StabilizationSpec s = stab;
   if (s.C == StabilizationSpec::kFromMaterial) s.C = micromodulusC(material, disc.horizon, disc.thickness);
   return s;
+}
+
+StabilizationSpec ProblemSpec::stabilizationSpec(const BlockSpec& b) const {
+  StabilizationSpec s;
+  s.G = b.G ? *b.G : stab.G;
+  s.C = b.C == StabilizationSpec::kFromMaterial ? micromodulusC(b.material, disc.horizon, disc.thickness) : b.C;
+  return s;
+}
+
+std::vector<int> ProblemSpec::blockIndex() const {
+  std::vector<int> index;
+  if (blocks.empty()) return index;
+  std::map<int, int> of;
+  for (std::size_t k = 0; k < blocks.size(); ++k) of[blocks[k].id] = static_cast<int>(k);
+  index.resize(disc.block.size());
+  for (std::size_t p = 0; p < disc.block.size(); ++p) {
+    const auto it = of.find(disc.block[p]);
+    if (it == of.end())
+      throw std::invalid_argument("ProblemSpec: particle " + std::to_string(p) + " is in block " + std::to_string(disc.block[p]) +
+                                  ", which has no entry in blocks; give every block its material");
+    index[p] = it->second;
+  }
+  return index;
+}
+
+std::vector<MaterialSpec> ProblemSpec::materials() const {
+  if (blocks.empty()) return {material};
+  std::vector<MaterialSpec> m;
+  for (const auto& b : blocks) m.push_back(b.material);
+  return m;
+}
+
+double ProblemSpec::stiffestModulus() const {
+  double E = blocks.empty() ? material.E : 0.0;
+  for (const auto& b : blocks) E = std::max(E, b.material.E);
+  return E;
 }
 
 std::shared_ptr<ProblemSpec> problemOnLattice(const LatticeSpec& lattice, const MaterialSpec& material) {
@@ -135,6 +212,7 @@ void validateProblem(const ProblemSpec& P) {
       refuse("damageSpec needs 0 < sMin < sCr (sMin = " + number(s.sMin) + ", sCr = " + number(s.sCr) + ")");
     positive(s.beta, "damageSpec.beta");
   }
+  if (!P.blocks.empty()) validateBlocks(P);
   if (!std::isfinite(P.rotation.angle) || !P.rotation.center.allFinite() || !P.rotation.axis.allFinite())
     refuse("rotation has a non-finite angle, centre or axis");
   if (P.rotates() && std::abs(P.rotation.axis.norm() - 1.0) > 1e-9) refuse("rotation.axis must be a unit vector");

@@ -86,7 +86,8 @@ const std::map<std::string, std::string>& namedSublists() {
                                                     {"Boundary Conditions", "condition"},
                                                     {"Loads", "load"},
                                                     {"Probes", "probe"},
-                                                    {"Holes", "hole"}};
+                                                    {"Holes", "hole"},
+                                                    {"Blocks", "block"}};
   return m;
 }
 
@@ -302,8 +303,41 @@ ParameterList probeTemplate() {
   return r;
 }
 
+void materialKeys(ParameterList& m, const std::string& lead = "") {
+  setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}}, lead.empty() ? "" : lead + "model: ");
+  setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, lead.empty() ? "2D: " : lead + "plane (2D): ");
+  setNumber(m, "Young's Modulus", 0.0, lead + "E, in the scene's stress units", positive());
+  setNumber(m, "Poisson's Ratio", 0.0, lead + "nu", reals(End::Open, -1, 0.5, End::Open, "nu = 0.5 is incompressible: the Lame constant lambda is infinite"));
+}
+
+void damageLawKeys(ParameterList& dm, const std::string& lead = "") {
+  dm.set("Critical Stretch", 0.002, lead + "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
+  dm.set("Softening Start", 0.0015, lead + "s_min: bond forces soften from here (0 < s_min < s_cr)");
+  setNumber(dm, "Beta", 3.0, lead + "steepness of the tanh softening", positive());
+  setChoice<DamageSpec::Softening>(dm, "Softening", "Paper",
+            {{"Paper", DamageSpec::Softening::Paper, "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
+             {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}}, lead.empty() ? "" : lead + "softening: ");
+}
+
+/// One entry of Blocks: a block's own material, G and damage law (each key not given takes the
+/// top-level list's value: Material/..., Model/G, Damage/...).
+ParameterList blockTemplate() {
+  const std::string p = "Blocks/*";
+  ParameterList b("block");
+  b.set("Id", -1, "the block's id (particle file: 5th column; Exodus: element block id; lattice: the id the Box gives, others are block 1); -1: give Name");
+  b.set("Name", "", "Exodus: the element block's name (give Name or Id)");
+  setVector(b, p, "Box Min", arr<double>({}), "Lattice: the block is the particles (fictitious ones included) in [Box Min, Box Max]; particles in no box are block 1", Length::DimOrEmpty);
+  setVector(b, p, "Box Max", arr<double>({}), "Lattice: upper corner of the block's box", Length::DimOrEmpty);
+  materialKeys(b.sublist("Material", false, "the block's material; a key not given takes the top-level Material's"), "the block's ");
+  setNumber(b.sublist("Stabilization", false, "the block's Silling stabilisation (needs Model/Stabilization = Silling)"), "G", 0.0,
+            "the block's G (not given: Model/G); C is the micromodulus of the block's material", nonNegative());
+  damageLawKeys(b.sublist("Damage", false, "the block's damage law (needs Damage/Enabled); a key not given takes the top-level Damage's; a bond between two blocks takes the law with the smaller Critical Stretch"),
+                "the block's ");
+  return b;
+}
+
 const ParameterList& templateFor(const std::string& sub) {
-  static const std::map<std::string, ParameterList> t{{"Regions", regionTemplate()},
+  static const std::map<std::string, ParameterList> t{{"Regions", regionTemplate()}, {"Blocks", blockTemplate()},
                                                       {"Boundary Conditions", conditionTemplate()},
                                                       {"Loads", loadTemplate()},
                                                       {"Probes", probeTemplate()},
@@ -342,10 +376,7 @@ void discretizationSchema(ParameterList& d) {
 }
 
 void materialSchema(ParameterList& m) {
-  setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}});
-  setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, "2D: ");
-  setNumber(m, "Young's Modulus", 0.0, "E, in the scene's stress units", positive());
-  setNumber(m, "Poisson's Ratio", 0.0, "nu", reals(End::Open, -1, 0.5, End::Open, "nu = 0.5 is incompressible: the Lame constant lambda is infinite"));
+  materialKeys(m);
   setChoice(m, "Modulus Field", "Uniform",
             {{"Uniform", ""}, {"Seed001 Bar", "E(x) of seed 001 eq. 18: E on the left half, softer to the right"}});
   setNumber(m, "Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20", positive());
@@ -364,12 +395,7 @@ void modelSchema(ParameterList& mo) {
 
 void damageSchema(ParameterList& dm) {
   dm.set("Enabled", false, "turn the damage effect on");
-  dm.set("Critical Stretch", 0.002, "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
-  dm.set("Softening Start", 0.0015, "s_min: bond forces soften from here (0 < s_min < s_cr)");
-  setNumber(dm, "Beta", 3.0, "steepness of the tanh softening", positive());
-  setChoice<DamageSpec::Softening>(dm, "Softening", "Paper",
-            {{"Paper", DamageSpec::Softening::Paper, "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
-             {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}});
+  damageLawKeys(dm);
   setNumber(dm, "Max Break Rounds", 50, "break-and-re-equilibrate rounds allowed per load step", ints(1));
   setChoice(dm, "On Stall", "Stop",
             {{"Stop", "the paper's Fig. 8; the run stops with a diagnosis"},
@@ -474,6 +500,7 @@ Teuchos::RCP<ParameterList> buildSchema() {
   materialSchema(s->sublist("Material", false, "elastic material"));
   modelSchema(s->sublist("Model", false, "effects"));
   damageSchema(s->sublist("Damage", false, "implicit damage: tanh bond softening, bonds broken after converged steps"));
+  s->sublist("Blocks", false, "blocks with their own materials (docs/exodus.md): one entry per block; none: every particle has the top-level Material");
   s->sublist("Regions", false, "named particle sets");
   s->sublist("Boundary Conditions", false, "named Dirichlet conditions");
   s->sublist("Loads", false, "named loads");
@@ -487,6 +514,11 @@ Teuchos::RCP<ParameterList> buildSchema() {
   // For 'perinox schema': the keys of one entry of each named sublist (nothing reads them).
   for (const auto& [sub, what] : namedSublists()) {
     ParameterList& parent = sub == "Holes" ? s->sublist("Discretization").sublist("Holes") : s->sublist(sub);
+    if (sub == "Blocks") {  // its entries' sublists are documented as sublists, with their keys
+      ParameterList& e = parent.sublist("<name>", false, "one " + what + ", under a name of the scene's choosing");
+      e.setParameters(templateFor(sub));
+      continue;
+    }
     parent.sublist("<name>", false, "one " + what + ", under a name of the scene's choosing").setParameters(templateFor(sub));
   }
   return s;
@@ -672,6 +704,20 @@ void checkFinite(const ParameterList& pl, const std::string& file) {
   });
 }
 
+/// A block's keys it does not give take the top-level lists' values (filled before Blocks, which
+/// follows them in the schema): Material/..., Model/G as Stabilization/G, Damage/....
+void inheritBlockDefaults(ParameterList& block, const ParameterList& top) {
+  const std::pair<const char*, const char*> from[] = {{"Material", "Material"}, {"Stabilization", "Model"}, {"Damage", "Damage"}};
+  for (const auto& [mine, theirs] : from) {
+    ParameterList& l = block.sublist(mine);
+    const ParameterList& t = top.sublist(theirs);
+    for (auto k = templateFor("Blocks").sublist(mine).begin(); k != templateFor("Blocks").sublist(mine).end(); ++k) {
+      const std::string& key = templateFor("Blocks").sublist(mine).name(k);
+      if (!l.isParameter(key) && t.isParameter(key)) l.setEntry(key, t.getEntry(key));
+    }
+  }
+}
+
 /// Fills defaults (recursively, including named sublists' children).
 void fillDefaults(ParameterList& user, const ParameterList& valid) {
   for (auto v = valid.begin(); v != valid.end(); ++v) {
@@ -681,8 +727,10 @@ void fillDefaults(ParameterList& user, const ParameterList& valid) {
       ParameterList& sub = user.sublist(name);
       auto named = namedSublists().find(name);
       if (named != namedSublists().end()) {
-        for (auto c = sub.begin(); c != sub.end(); ++c)
+        for (auto c = sub.begin(); c != sub.end(); ++c) {
+          if (name == "Blocks") inheritBlockDefaults(sub.sublist(sub.name(c)), user);
           fillDefaults(sub.sublist(sub.name(c)), templateFor(name));
+        }
       } else {
         fillDefaults(sub, valid.sublist(name));
       }
@@ -1270,6 +1318,83 @@ void readDamage(SceneBuild& b) {
   sc.reloadTolerance = dm.ranged<double>("Reload Tolerance");
 }
 
+/// Blocks: each block's material, G and damage law (ProblemSpec::blocks); on a lattice, the
+/// blocks' boxes set the particles' block ids first. Every particle's block needs an entry.
+void readBlocks(SceneBuild& b) {
+  const Section bl = b.section("Blocks");
+  if (bl.list.numParams() == 0) return;
+  ProblemSpec& P = b.problem;
+  Discretization& d = P.disc;
+  const std::string& file = b.file;
+  const std::string type = b.pl.sublist("Discretization").get<std::string>("Type");
+  std::vector<std::string> boxOf(d.size());  // lattice: the entry whose box gave the particle its block
+  std::map<int, std::string> entryOf;        // block id -> entry
+  for (auto it = bl.list.begin(); it != bl.list.end(); ++it) {
+    const std::string name = bl.list.name(it);
+    const Section e = bl.entry(name, "Blocks");
+    const std::string key = "'Blocks/" + name + "/";
+    const std::string bname = e.get<std::string>("Name");
+    int id = e.get<int>("Id");
+    if (id < -1) fail(file, key + "Id' must be >= 0 (or -1: none, give Name)");
+    if (bname.empty() == (id == -1)) fail(file, "block '" + name + "' needs exactly one of Name and Id");
+    if (!bname.empty()) {
+      if (type != "Exodus") fail(file, key + "Name' names a block, but only Exodus blocks have names; give its Id");
+      auto m = std::find_if(b.mesh.blocks.begin(), b.mesh.blocks.end(), [&](const MeshBlock& blk) { return blk.name == bname; });
+      if (m == b.mesh.blocks.end()) fail(file, "block '" + name + "': the mesh has no element block named '" + bname + "'");
+      id = m->id;
+    }
+    const auto lo = e.get<Array<double>>("Box Min"), hi = e.get<Array<double>>("Box Max");
+    if (lo.empty() != hi.empty()) fail(file, "block '" + name + "' needs both Box Min and Box Max, or neither");
+    if (!lo.empty()) {
+      if (type != "Lattice") fail(file, key + "Box Min' is for lattices; a particle file's or mesh's blocks come from the file");
+      for (int p : selectBox(d, vec3(lo), vec3(hi), Population::All)) {
+        if (!boxOf[p].empty())
+          fail(file, "the particle at " + position(d, p) + " is in the boxes of blocks '" + boxOf[p] + "' and '" + name + "'; block boxes must not overlap");
+        boxOf[p] = name;
+        d.block[p] = id;
+      }
+    }
+    if (!entryOf.emplace(id, name).second)
+      fail(file, "blocks '" + entryOf[id] + "' and '" + name + "' both name block " + std::to_string(id) + "; give each block one entry");
+    BlockSpec spec;
+    spec.id = id;
+    const Section m = e.sub("Material");
+    spec.material.dim = b.dim;
+    spec.material.kind = m.choice<MaterialKind>("Model");
+    spec.material.planar = b.dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
+    spec.material.E = m.ranged<double>("Young's Modulus");
+    spec.material.nu = m.ranged<double>("Poisson's Ratio");
+    const double G = e.sub("Stabilization").ranged<double>("G");
+    if (G > 0 && b.pl.sublist("Model").get<std::string>("Stabilization") != "Silling")
+      fail(file, key + "Stabilization/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
+    spec.G = G;
+    if (G > 0) P.stabilization = true;
+    if (P.damage) {
+      const Section dm = e.sub("Damage");
+      DamageSpec ds;
+      ds.sCr = dm.get<double>("Critical Stretch");
+      ds.sMin = dm.get<double>("Softening Start");
+      if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
+        fail(file, key + "Damage/Softening Start' and 'Critical Stretch' must satisfy 0 < s_min < s_cr");
+      ds.beta = dm.ranged<double>("Beta");
+      ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+      spec.damage = ds;
+      const DamageSpec& top = P.damageSpec;
+      if (b.sc.stallBreak && (ds.sCr != top.sCr || ds.sMin != top.sMin || ds.beta != top.beta || ds.softening != top.softening))
+        fail(file, "block '" + name + "' has its own damage law, but 'Damage/On Stall' = Break Most Stretched compares raw stretches "
+                   "across blocks; use On Stall = Stop, or the top-level law for every block");
+    }
+    P.blocks.push_back(spec);
+  }
+  std::map<int, long long> count;
+  for (int p = 0; p < d.size(); ++p) ++count[d.block[p]];
+  for (const auto& [id, n] : count)
+    if (!entryOf.count(id))
+      fail(file, "block " + std::to_string(id) + " (" + std::to_string(n) + " particles) has no entry under 'Blocks'; give every block its material");
+  for (const auto& [id, name] : entryOf)
+    if (!count.count(id)) fail(file, "block '" + name + "' names block " + std::to_string(id) + ", which has no particle");
+}
+
 /// One region's particles.
 std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::string& name) {
   const Discretization& d = b.problem.disc;
@@ -1592,7 +1717,7 @@ using SceneStep = void (*)(SceneBuild&);
 const std::vector<SceneStep>& sceneSteps() {
   static const std::vector<SceneStep> steps{
       readMaterial, readDiscretization, readStabilization, readModulusField, readControls,
-      readDamage,   readRegions,        readBoundaryConditions, readLoads,   readRotation,
+      readDamage,   readBlocks,         readRegions,        readBoundaryConditions, readLoads,   readRotation,
       readProbes,   readReference,      readSolver,        readLinearSolver, readOutput};
   return steps;
 }
@@ -1605,6 +1730,17 @@ int checkScene(ParameterList& pl, const ParameterList& schema, const std::string
   const int dim = given.isParameter("Dimension") ? given.get<int>("Dimension") : schema.sublist("Discretization").get<int>("Dimension");
   if (dim < 1 || dim > 3) fail(file, "'Discretization/Dimension' must be 1, 2 or 3");
   checkGivenValues(pl, dim, file);
+  // A block's damage law or G only means something with the top-level switch on (checked on the
+  // keys given, before the defaults fill them in).
+  if (pl.isSublist("Blocks")) {
+    const ParameterList& blocks = pl.sublist("Blocks");
+    const bool damage = pl.isSublist("Damage") && pl.sublist("Damage").isParameter("Enabled") && pl.sublist("Damage").get<bool>("Enabled");
+    for (auto c = blocks.begin(); c != blocks.end(); ++c) {
+      const ParameterList& blk = blocks.sublist(blocks.name(c));
+      if (!damage && blk.isSublist("Damage") && blk.sublist("Damage").numParams() > 0)
+        fail(file, "'Blocks/" + blocks.name(c) + "/Damage' is given but 'Damage/Enabled' is false; enable damage or remove it");
+    }
+  }
   fillDefaults(pl, schema);
   checkFinite(pl, file);
   return dim;

@@ -69,7 +69,7 @@ void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
     P = Eigen::Map<const MatD<D>>(w.cache);
     A = Eigen::Map<const TangentD<D>>(w.cache + D * D);
   } else {
-    piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
+    piola<D>(material(w.i), w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
     if (w.cache) {
       Eigen::Map<MatD<D>>(w.cache) = P;
       Eigen::Map<TangentD<D>>(w.cache + D * D) = A;
@@ -86,7 +86,8 @@ template <int D>
 void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
   double w0 = 0;
   for (int j = 0; j < w.m; ++j) w0 += w.Vj[j];
-  const double c = spec_.G * spec_.C * w.Vi / w0;
+  const StabilizationSpec& st = spec(w.i);
+  const double c = st.G * st.C * w.Vi / w0;
   for (int j = 0; j < w.m; ++j) {
     w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
     w.dt[j].noalias() += c * (w.dY[j] - w.dF * w.xi[j]);
@@ -130,7 +131,7 @@ void StressPointEffect<D>::addDirectional(BondWork<D>& w) const {
     const Mat Kinv = K.inverse();
     Mat P;
     TangentD<D> A;
-    piola<D>(material_, kinematics::deformationGradient(FK, Kinv), sc, true, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), sc, true, w.i, P, A);
     const Mat dP = contract<D>(A, kinematics::deformationGradient(dFK, Kinv));
     for (int l = 0; l < w.m; ++l) {
       if (grp[l] != p) continue;
@@ -145,7 +146,7 @@ template <int D>
 void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   MatD<D> P;
   TangentD<D> A;
-  piola<D>(material_, w.F, scale_.empty() ? 1.0 : scale_[w.i], tangent, w.i, P, A);
+  piola<D>(material(w.i), w.F, scale_.empty() ? 1.0 : scale_[w.i], tangent, w.i, P, A);
   addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, w.h, w.gsum, [](int) { return true; });
 }
 
@@ -154,7 +155,8 @@ void StabilizationEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   double w0 = 0;
   for (int j = 0; j < w.m; ++j) w0 += w.Vj[j];
   w0 /= w.Vi;
-  const double c = spec_.G * spec_.C / w0;
+  const StabilizationSpec& st = spec(w.i);
+  const double c = st.G * st.C / w0;
   for (int j = 0; j < w.m; ++j) w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
   if (!tangent) return;
   // dT_j/du_k = c [ (delta_{k,j} - delta_{k,i}) - g_k . xi_j ] I
@@ -243,7 +245,7 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
       }
     Mat P;
     TangentD<D> A;
-    piola<D>(material_, kinematics::deformationGradient(FK, Kinv), sc, tangent, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), sc, tangent, w.i, P, A);
     addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, h, gsum, in);
   }
 }

@@ -11,16 +11,21 @@ namespace perinox {
 template <int D>
 class CorrespondenceEffect final : public ForceEffect<D> {
  public:
-  explicit CorrespondenceEffect(const Material& m) : material_(m) {}
-  void prepare(const LocalParticles& p) override { scale_ = p.modulusScale; }
+  explicit CorrespondenceEffect(const std::vector<Material>& m) : materials_(m) {}
+  void prepare(const LocalParticles& p) override {
+    scale_ = p.modulusScale;
+    index_ = p.material;
+  }
   const char* name() const override { return "correspondence"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
   int cacheSize() const override { return D * D + D * D * D * D; }  // P and A = dP/dF
 
  private:
-  const Material& material_;
+  const Material& material(int i) const { return index_.empty() ? materials_.front() : materials_[index_[i]]; }
+  const std::vector<Material>& materials_;
   std::vector<double> scale_;
+  std::vector<int> index_;
 };
 
 /// Springs (C1) or average displacement state (C2) supplementary forces.
@@ -49,10 +54,11 @@ class ControlEffect final : public ForceEffect<D> {
 template <int D>
 class StressPointEffect final : public ForceEffect<D> {
  public:
-  StressPointEffect(const Material& m, unsigned seed) : material_(m), seed_(seed) {}
+  StressPointEffect(const std::vector<Material>& m, unsigned seed) : materials_(m), seed_(seed) {}
   const char* name() const override { return "stress-point correspondence"; }
   void prepare(const LocalParticles& p) override {
     scale_ = p.modulusScale;
+    index_ = p.material;
     globalId_ = p.globalId;
   }
   void addForces(BondWork<D>& w, bool tangent) const override;
@@ -61,23 +67,29 @@ class StressPointEffect final : public ForceEffect<D> {
   int groups(const BondWork<D>& w, std::vector<int>& g) const;
 
  private:
-  const Material& material_;
+  const Material& material(int i) const { return index_.empty() ? materials_.front() : materials_[index_[i]]; }
+  const std::vector<Material>& materials_;
   unsigned seed_;
   std::vector<double> scale_;
+  std::vector<int> index_;
   std::vector<long long> globalId_;
 };
 
-/// Silling's stabilisation: T_z = (G C / w0_i) (Y - F xi), w0_i = sum_j V_j / V_i.
+/// Silling's stabilisation: T_z = (G C / w0_i) (Y - F xi), w0_i = sum_j V_j / V_i, with G and C
+/// of particle i's material (one entry per material of the model's table).
 template <int D>
 class StabilizationEffect final : public ForceEffect<D> {
  public:
-  explicit StabilizationEffect(const StabilizationSpec& s) : spec_(s) {}
+  explicit StabilizationEffect(std::vector<StabilizationSpec> s) : specs_(std::move(s)) {}
+  void prepare(const LocalParticles& p) override { index_ = p.material; }
   const char* name() const override { return "stabilization"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
 
  private:
-  StabilizationSpec spec_;
+  const StabilizationSpec& spec(int i) const { return index_.empty() ? specs_.front() : specs_[index_[i]]; }
+  std::vector<StabilizationSpec> specs_;
+  std::vector<int> index_;
 };
 
 }  // namespace perinox

@@ -38,10 +38,11 @@ struct Model::Impl {
   virtual void evaluate(const Model& m, const std::vector<double>& u, ElementSink& sink,
                         bool tangent) const = 0;
   virtual std::vector<ParticleOutput> outputs(const Model& m, const std::vector<double>& u) const = 0;
-  virtual void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) = 0;
-  virtual void setDamage(const DamageSpec* d) = 0;
+  virtual void addCorrespondence(const std::vector<Material>& mats) = 0;
+  virtual void addStabilization(const std::vector<StabilizationSpec>& perMaterial) = 0;
+  virtual void setDamage(const Model* m) = 0;
   virtual void addControl(const ControlSpec& c) = 0;
-  virtual void addStressPoints(const Material& m, unsigned seed) = 0;
+  virtual void addStressPoints(const std::vector<Material>& m, unsigned seed) = 0;
   virtual std::vector<std::string> names() const = 0;
   virtual void applyTangent(const Model& m, const std::vector<double>& u, const std::vector<double>& v,
                             double* jv) const = 0;
@@ -56,25 +57,25 @@ struct ImplD final : Model::Impl {
   using Vec = Eigen::Matrix<double, D, 1>;
   using Mat = Eigen::Matrix<double, D, D>;
   std::vector<std::unique_ptr<ForceEffect<D>>> effects;
-  std::optional<DamageSpec> damage;
+  const Model* damage = nullptr;  // the model, once damage is enabled (its bondDamage gives each bond's law)
 
-  void setDamage(const DamageSpec* d) override {
-    if (d) damage = *d;
+  void setDamage(const Model* m) override {
+    damage = m;
     linValid_ = false;
   }
   void addControl(const ControlSpec& c) override { effects.push_back(std::make_unique<ControlEffect<D>>(c)); }
-  void addStressPoints(const Material& m, unsigned seed) override {
+  void addStressPoints(const std::vector<Material>& m, unsigned seed) override {
     effects.push_back(std::make_unique<StressPointEffect<D>>(m, seed));
   }
 
   /// Bond softening applied to the summed force state of every effect:
   /// t_j <- T_s(s_j) t_j and dt_j/du_k <- T_s dt_j/du_k + t_j (x) T_s' ds_j/du_k, where
   /// ds_j/du_j = Y_j / (|Y_j| |xi_j|) = -ds_j/du_i.
-  static void soften(const DamageSpec& d, BondWork<D>& w, bool tangent) {
+  static void soften(const Model& model, BondWork<D>& w, bool tangent) {
     for (int j = 0; j < w.m; ++j) {
       const double ly = w.Y[j].norm(), lx = w.xi[j].norm();
       double Ts, dTs;
-      bondSoftening(d, (ly - lx) / lx, Ts, dTs);
+      bondSoftening(model.bondDamage(w.i, w.nbr[j]), (ly - lx) / lx, Ts, dTs);
       if (tangent) {
         for (int k = 0; k <= w.m; ++k) w.dT(j, k) *= Ts;
         if (dTs != 0.0 && ly > 0) {
@@ -90,11 +91,11 @@ struct ImplD final : Model::Impl {
 
   /// The directional form of soften: dt_j <- T_s dt_j + T_s' (Y_j . dY_j / (|Y_j| |xi_j|)) t_j,
   /// then t_j <- T_s t_j.
-  static void softenDirectional(const DamageSpec& d, BondWork<D>& w) {
+  static void softenDirectional(const Model& model, BondWork<D>& w) {
     for (int j = 0; j < w.m; ++j) {
       const double ly = w.Y[j].norm(), lx = w.xi[j].norm();
       double Ts, dTs;
-      bondSoftening(d, (ly - lx) / lx, Ts, dTs);
+      bondSoftening(model.bondDamage(w.i, w.nbr[j]), (ly - lx) / lx, Ts, dTs);
       w.dt[j] *= Ts;
       if (dTs != 0.0 && ly > 0) w.dt[j] += (dTs * w.Y[j].dot(w.dY[j]) / (ly * lx)) * w.t[j];
       w.t[j] *= Ts;
@@ -156,9 +157,11 @@ struct ImplD final : Model::Impl {
     linValid_ = true;  // (an evaluation error above leaves it invalid)
   }
 
-  void add(const Material& mat, bool correspondence, const StabilizationSpec* stab) override {
-    if (correspondence) effects.push_back(std::make_unique<CorrespondenceEffect<D>>(mat));
-    if (stab) effects.push_back(std::make_unique<StabilizationEffect<D>>(*stab));
+  void addCorrespondence(const std::vector<Material>& mats) override {
+    effects.push_back(std::make_unique<CorrespondenceEffect<D>>(mats));
+  }
+  void addStabilization(const std::vector<StabilizationSpec>& perMaterial) override {
+    effects.push_back(std::make_unique<StabilizationEffect<D>>(perMaterial));
   }
   std::vector<std::string> names() const override {
     std::vector<std::string> n;
@@ -300,7 +303,7 @@ struct ImplD final : Model::Impl {
           }
           const Mat Fp = kinematics::deformationGradient<Mat>(FK, K.inverse());
           Eigen::Matrix3d sp3;
-          const bool ok = model.material().template cauchy<D>(Fp, sp3);
+          const bool ok = model.material(i).template cauchy<D>(Fp, sp3);
           valid = valid && ok;
           Fsum += v * Fp;
           if (ok) ssum += v * sp3;
@@ -310,7 +313,7 @@ struct ImplD final : Model::Impl {
         out[i].valid = valid;
         s = valid ? Eigen::Matrix3d(ssum / vsum) : Eigen::Matrix3d::Zero();
       } else {
-        out[i].valid = model.material().template cauchy<D>(F, s);
+        out[i].valid = model.material(i).template cauchy<D>(F, s);
         if (!out[i].valid) s.setZero();
       }
       out[i].F.setIdentity();
@@ -324,15 +327,28 @@ struct ImplD final : Model::Impl {
 }  // namespace
 
 Model::Model(const MaterialSpec& material, LocalParticles particles)
-    : materialSpec_(material), material_(material), particles_(std::move(particles)) {
+    : Model(std::vector<MaterialSpec>{material}, std::move(particles)) {}
+
+Model::Model(const std::vector<MaterialSpec>& materials, LocalParticles particles) : particles_(std::move(particles)) {
+  if (materials.empty()) throw std::invalid_argument("the model needs at least one material");
+  materials_.reserve(materials.size());
+  for (const MaterialSpec& m : materials) {
+    if (m.dim != particles_.dim) throw std::invalid_argument("material dimension differs from the discretisation's");
+    materials_.emplace_back(m);
+  }
+  if (!particles_.material.empty()) {
+    if (particles_.material.size() != particles_.X.size())
+      throw std::invalid_argument("LocalParticles::material needs one entry per local particle");
+    for (int k : particles_.material)
+      if (k < 0 || k >= static_cast<int>(materials_.size()))
+        throw std::invalid_argument("LocalParticles::material names material " + std::to_string(k) + ", which the table does not have");
+  }
   switch (particles_.dim) {
     case 1: impl_ = std::make_unique<ImplD<1>>(); break;
     case 2: impl_ = std::make_unique<ImplD<2>>(); break;
     case 3: impl_ = std::make_unique<ImplD<3>>(); break;
     default: throw std::invalid_argument("model dimension must be 1, 2 or 3");
   }
-  if (material.dim != particles_.dim)
-    throw std::invalid_argument("material dimension differs from the discretisation's");
   checkShapeTensors();
   familyVolume0_.assign(particles_.numOwned, 0.0);
   for (int i = 0; i < particles_.numOwned; ++i)
@@ -346,7 +362,7 @@ void Model::enableControl(const ControlSpec& c) {
 }
 
 void Model::enableStressPoints(unsigned seed) {
-  impl_->addStressPoints(material_, seed);
+  impl_->addStressPoints(materials_, seed);
   impl_->prepare(particles_);
 }
 
@@ -354,12 +370,40 @@ void Model::enableDamage(const DamageSpec& d) {
   if (!(d.sMin > 0 && d.sCr > d.sMin && d.beta > 0))
     throw std::invalid_argument("damage needs 0 < s_min < s_cr and beta > 0");
   damage_ = d;
-  impl_->setDamage(&d);
+  damageLaws_.clear();
+  impl_->setDamage(this);
+}
+
+void Model::enableDamage(const std::vector<DamageSpec>& perMaterial) {
+  if (perMaterial.size() != materials_.size())
+    throw std::invalid_argument("enableDamage needs one damage law per material (" + std::to_string(materials_.size()) + ")");
+  for (const DamageSpec& d : perMaterial)
+    if (!(d.sMin > 0 && d.sCr > d.sMin && d.beta > 0))
+      throw std::invalid_argument("damage needs 0 < s_min < s_cr and beta > 0");
+  damage_ = perMaterial.front();
+  damageLaws_ = perMaterial;
+  impl_->setDamage(this);
+}
+
+const DamageSpec& Model::bondDamage(int i, int j) const {
+  if (damageLaws_.empty() || particles_.material.empty()) return *damage_;
+  const int a = particles_.material[i], b = particles_.material[j];
+  if (a == b) return damageLaws_[a];
+  const DamageSpec &da = damageLaws_[a], &db = damageLaws_[b];
+  // The end with the smaller critical stretch decides (ties: the lower index): symmetric in (i, j).
+  return da.sCr < db.sCr || (da.sCr == db.sCr && a < b) ? da : db;
 }
 
 long long Model::breakBonds(const std::vector<double>& u) {
   if (!damage_) return 0;
-  return breakBondsAbove(u, damage_->sCr);
+  if (damageLaws_.empty() || particles_.material.empty()) return breakBondsAbove(u, damage_->sCr);
+  long long broken = 0;
+  removeBondsIf([&](int i, int j) {
+    const bool brk = bondStretch(u, i, j) >= bondDamage(i, j).sCr;
+    broken += brk && particles_.globalId[i] < particles_.globalId[j];
+    return !brk;
+  });
+  return broken;
 }
 
 double Model::bondStretch(const std::vector<double>& u, int i, int j) const {
@@ -458,11 +502,15 @@ std::vector<double> Model::damageIndex() const {
 
 Model::~Model() = default;
 
-void Model::enableCorrespondence() { impl_->add(material_, true, nullptr); impl_->prepare(particles_); }
-void Model::enableStabilization(const StabilizationSpec& s) {
-  if (!(s.C >= 0) || !std::isfinite(s.C))
-    throw std::invalid_argument("the stabilisation needs a micromodulus C >= 0 (micromodulusC, or ProblemSpec::stabilizationSpec)");
-  impl_->add(material_, false, &s);
+void Model::enableCorrespondence() { impl_->addCorrespondence(materials_); impl_->prepare(particles_); }
+void Model::enableStabilization(const StabilizationSpec& s) { enableStabilization(std::vector<StabilizationSpec>(materials_.size(), s)); }
+void Model::enableStabilization(const std::vector<StabilizationSpec>& perMaterial) {
+  if (perMaterial.size() != materials_.size())
+    throw std::invalid_argument("enableStabilization needs one entry per material (" + std::to_string(materials_.size()) + ")");
+  for (const StabilizationSpec& s : perMaterial)
+    if (!(s.C >= 0) || !std::isfinite(s.C))
+      throw std::invalid_argument("the stabilisation needs a micromodulus C >= 0 (micromodulusC, or ProblemSpec::stabilizationSpec)");
+  impl_->addStabilization(perMaterial);
   impl_->prepare(particles_);
 }
 std::vector<std::string> Model::effectNames() const { return impl_->names(); }

@@ -218,6 +218,13 @@ class LatticeFemSource final : public AuxiliarySource {
       return it == site.end() ? -1 : it->second;
     };
     const Eigen::MatrixXd Ke = latticeElementStiffness(D, h, P.material, P.disc.thickness);
+    // Blocks: each block's element stiffness; a cell takes the mean of its corners' (below).
+    std::vector<Eigen::MatrixXd> blockKe;
+    std::vector<int> blockOf;
+    if (!P.blocks.empty()) {
+      for (const BlockSpec& blk : P.blocks) blockKe.push_back(latticeElementStiffness(D, h, blk.material, P.disc.thickness));
+      blockOf = P.blockIndex();
+    }
     const int nn = 1 << D;
     // Prescribed rows: a unit diagonal scaled like an interior node's diagonal.
     std::vector<double> diag(D);
@@ -244,12 +251,20 @@ class LatticeFemSource final : public AuxiliarySource {
           for (int a = 0; a < nn; ++a) scale += P.modulusScale[nodes[a]] / nn;
         }
         const int me = static_cast<int>(std::find(nodes, nodes + nn, static_cast<int>(p)) - nodes);
+        Eigen::MatrixXd cellKe;
+        if (!blockOf.empty()) {  // blocks: the mean of the corners' block stiffnesses (times their scales)
+          cellKe = Eigen::MatrixXd::Zero(Ke.rows(), Ke.cols());
+          for (int a = 0; a < nn; ++a)
+            cellKe += (P.modulusScale.empty() ? 1.0 : P.modulusScale[nodes[a]]) / nn * blockKe[blockOf[nodes[a]]];
+          scale = 1.0;
+        }
+        const Eigen::MatrixXd& K = blockOf.empty() ? Ke : cellKe;
         for (int c = 0; c < D; ++c) {
           if (ev.freeDof(p, c) < 0) continue;
           for (int a = 0; a < nn; ++a)
             for (int e = 0; e < D; ++e)
               if (ev.freeDof(nodes[a], e) >= 0)  // prescribed columns eliminated
-                row[c][static_cast<GO>(nodes[a]) * D + e] += scale * Ke(me * D + c, a * D + e);
+                row[c][static_cast<GO>(nodes[a]) * D + e] += scale * K(me * D + c, a * D + e);
         }
       }
       for (int c = 0; c < D; ++c) {
@@ -304,7 +319,11 @@ class ShortHorizonSource final : public AuxiliarySource {
   void rebuild(long long damage) {
     const PeridynamicEvaluator& ev = *ev_;
     auto P = std::make_shared<ProblemSpec>(ev.problem());
-    P->stab = ev.problem().stabilizationSpec();  // the body's micromodulus, not the short horizon's
+    if (P->blocks.empty()) {
+      P->stab = ev.problem().stabilizationSpec();  // the body's micromodulus, not the short horizon's
+    } else {
+      for (BlockSpec& blk : P->blocks) blk.C = ev.problem().stabilizationSpec(blk).C;  // each block's, likewise
+    }
     P->disc.horizon = factor_ * P->disc.dx;
     if (!P->disc.familyOffset.empty()) buildFamilies(P->disc);  // else the evaluator finds its own
     auto aux = rcp(new PeridynamicEvaluator(ev.comm(), P));

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,15 @@ struct RotationSpec {
   Vec3 center = Vec3::Zero();
 };
 
+/// A block's own material and effects (ProblemSpec::blocks): the particles with disc.block[p] == id.
+struct BlockSpec {
+  int id = 1;
+  MaterialSpec material;                // the block's material (same dim as the problem)
+  std::optional<double> G;              // stabilisation G; unset: the problem's stab.G
+  double C = StabilizationSpec::kFromMaterial;  // micromodulus; default: micromodulusC of this block's material
+  std::optional<DamageSpec> damage;     // damage law; unset: the problem's damageSpec
+};
+
 struct ProblemSpec {
   Discretization disc;
   MaterialSpec material;
@@ -38,6 +48,11 @@ struct ProblemSpec {
   bool control = false;
   ControlSpec controlSpec;
   std::vector<double> modulusScale;     // per particle E_i / E; empty for a uniform material
+  // Blocks with their own materials: empty = every particle has `material` (and stab, damageSpec).
+  // Otherwise every particle's disc.block must have an entry; particle i's element uses its
+  // block's material, G and C, and a bond the damage law of the end with the smaller critical
+  // stretch (docs/exodus.md, "Blocks with their own materials").
+  std::vector<BlockSpec> blocks;
   // Loading at load factor 1 (scaled by the load factor lambda):
   std::vector<std::uint8_t> fixedMask;  // per particle: bit c set when component c is prescribed
   std::vector<double> prescribed;       // per particle * dim: prescribed displacement at lambda = 1
@@ -52,6 +67,15 @@ struct ProblemSpec {
   /// disc.horizon, disc.thickness) when it was left at StabilizationSpec::kFromMaterial (a host
   /// sets only G, as a scene does).
   StabilizationSpec stabilizationSpec() const;
+  /// The same for a block: its G (or stab.G) and its C (or micromodulusC of its material).
+  StabilizationSpec stabilizationSpec(const BlockSpec& b) const;
+  /// Per particle, the index of its block in `blocks` (empty when blocks is empty). Throws
+  /// std::invalid_argument (one sentence) when a particle's block has no entry.
+  std::vector<int> blockIndex() const;
+  /// The materials in force: {material}, or the blocks' materials in their order.
+  std::vector<MaterialSpec> materials() const;
+  /// The largest Young's modulus in force (for round-off floors and frozen-DOF stiffnesses).
+  double stiffestModulus() const;
   /// A non-zero displacement is prescribed somewhere (otherwise the load is dead loads only).
   bool prescribesDisplacement() const {
     for (double v : prescribed)

@@ -46,6 +46,9 @@ struct LocalParticles {
   std::vector<std::int64_t> famOffset;
   std::vector<int> famIndex;
   std::vector<double> modulusScale;  // per local particle (E_i / E); empty for a uniform material
+  // Per local particle (owned and ghosts): its index into the model's material table (a block's
+  // material, stabilisation and damage law); empty when every particle has material 0.
+  std::vector<int> material;
   int size() const { return static_cast<int>(X.size()); }
   /// Local id of global particle g if this rank owns it (owned ids are sorted), else -1.
   int ownedLocal(long long g) const {
@@ -178,12 +181,19 @@ struct ParticleOutput {
 class Model {
  public:
   Model(const MaterialSpec& material, LocalParticles particles);
+  /// Several materials (blocks): particle l has materials[particles.material[l]] (all of them the
+  /// first when particles.material is empty). Each particle's element uses its own material: its
+  /// P and A, and, with enableStabilization / enableDamage given per-material tables, its G and C
+  /// and damage law (a bond between two materials takes the law of the smaller critical stretch).
+  Model(const std::vector<MaterialSpec>& materials, LocalParticles particles);
   ~Model();
   Model(const Model&) = delete;
   Model& operator=(const Model&) = delete;
 
   void enableCorrespondence();
   void enableStabilization(const StabilizationSpec& s);
+  /// Per material (one entry per material of the table): particle i's T_z uses its material's G and C.
+  void enableStabilization(const std::vector<StabilizationSpec>& perMaterial);
   /// Supplementary-force control (springs or average displacement state).
   void enableControl(const ControlSpec& c);
   /// Stress points (seed 001): the correspondence force state computed per stress point from
@@ -192,6 +202,12 @@ class Model {
   void enableStressPoints(unsigned seed = 2018);
   /// Softens every bond force (of all effects) by T_s(s); see DamageSpec.
   void enableDamage(const DamageSpec& d);
+  /// Per material: a bond within one material softens and breaks by that material's law; a bond
+  /// between two takes the law with the smaller critical stretch (equal ones: the lower index), so
+  /// both ends (and ranks) choose the same.
+  void enableDamage(const std::vector<DamageSpec>& perMaterial);
+  /// The damage law of the bond between local particles i and j (damage enabled).
+  const DamageSpec& bondDamage(int i, int j) const;
   bool damageEnabled() const { return damage_.has_value(); }
   std::vector<std::string> effectNames() const;
 
@@ -219,7 +235,12 @@ class Model {
   std::vector<double> damageIndex() const;
 
   const LocalParticles& particles() const { return particles_; }
-  const Material& material() const { return material_; }
+  const Material& material() const { return materials_.front(); }
+  /// The material of local particle l.
+  const Material& material(int l) const {
+    return particles_.material.empty() ? materials_.front() : materials_[particles_.material[l]];
+  }
+  const std::vector<Material>& materials() const { return materials_; }
 
   /// Evaluates every owned element at local displacements u (size*dim, interleaved) and hands
   /// each to the sink (tangent only if wantTangent).
@@ -245,11 +266,11 @@ class Model {
   double bondStretch(const std::vector<double>& u, int i, int j) const;
   void checkShapeTensors() const;
   bool shapeTensorInvertible(int ownedLocal) const;
-  MaterialSpec materialSpec_;
   std::optional<DamageSpec> damage_;
+  std::vector<DamageSpec> damageLaws_;  // per material when enableDamage got a table
   std::vector<double> familyVolume0_;   // initial sum of V_j per owned particle
   std::vector<char> detached_;          // per owned particle
-  Material material_;
+  std::vector<Material> materials_;
   LocalParticles particles_;
   std::unique_ptr<Impl> impl_;
 };
