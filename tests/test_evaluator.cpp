@@ -91,6 +91,18 @@ struct Case {
 
 class EvaluatorFD : public ::testing::TestWithParam<Case> {};
 
+/// The evaluator's constructor refuses P with one sentence (no line break) containing part.
+void expectRefused(const std::shared_ptr<ProblemSpec>& P, const std::string& part) {
+  try {
+    PeridynamicEvaluator ev(Teuchos::DefaultComm<int>::getComm(), P);
+    ADD_FAILURE() << "accepted; expected a refusal naming " << part;
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(part), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
 }  // namespace
 
 // Directional finite differences: (f(x + h v) - f(x - h v)) / 2h = W v + O(h^2). With
@@ -226,17 +238,6 @@ TEST(EvaluatorReaction, KeptNormMatchesFreshEvaluation) {
 // A problem built in C++ is checked as a scene is: one sentence naming the field, thrown by the
 // evaluator's constructor before any map or graph is built (the same on every rank).
 TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  auto expectRefused = [&](const std::shared_ptr<ProblemSpec>& P, const std::string& part) {
-    try {
-      PeridynamicEvaluator ev(comm, P);
-      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
-    } catch (const std::invalid_argument& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(part), std::string::npos) << what;
-      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-    }
-  };
   {
     auto P = makeProblem(2, 3.015, 0.0, false);
     P->bodyForce[3] = std::nan("");
@@ -280,7 +281,7 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
     expectRefused(P, "do not prevent rigid-body motion");
   }
   // The unchanged problem is accepted.
-  EXPECT_NO_THROW(PeridynamicEvaluator(comm, makeProblem(2, 3.015, 0.1, true)));
+  EXPECT_NO_THROW(PeridynamicEvaluator(Teuchos::DefaultComm<int>::getComm(), makeProblem(2, 3.015, 0.1, true)));
 }
 
 // The stabilisation's micromodulus is the library's: a ProblemSpec that sets only G gets
@@ -289,18 +290,10 @@ TEST(ProblemValidation, HandBuiltProblemsWithBadFieldsAreRefusedByName) {
 // refused with one sentence.
 // Blocks in a hand-built problem: each refusal one sentence naming the field.
 TEST(ProblemValidation, BlocksAreCheckedByName) {
-  auto comm = Teuchos::DefaultComm<int>::getComm();
-  auto refused = [&](const std::function<void(ProblemSpec&)>& edit, const std::string& part) {
+  auto refused = [](const std::function<void(ProblemSpec&)>& edit, const std::string& part) {
     auto P = makeProblem(2, 2.015, 0.1, false, true);
     edit(*P);
-    try {
-      PeridynamicEvaluator ev(comm, P);
-      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
-    } catch (const std::invalid_argument& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(part), std::string::npos) << what;
-      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-    }
+    expectRefused(P, part);
   };
   refused([](ProblemSpec& P) { P.blocks[1].id = 1; }, "ProblemSpec: blocks[1] (block 1) repeats block id 1");
   refused([](ProblemSpec& P) { P.disc.block[0] = 9; }, "ProblemSpec: particle 0 is in block 9, which has no entry in blocks");
@@ -339,15 +332,6 @@ TEST(ProblemValidation, StabilizationConstantIsComputedByTheLibrary) {
     return ev->ownedFreeValues(*f);
   };
   EXPECT_EQ(residual(computed), residual(given));
-  auto expectRefused = [&](const std::shared_ptr<ProblemSpec>& P, const std::string& part) {
-    try {
-      PeridynamicEvaluator ev(comm, P);
-      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
-      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
-    }
-  };
   auto negative = std::make_shared<ProblemSpec>(*computed);
   negative->stab.C = -3.0;
   expectRefused(negative, "ProblemSpec: stab.C = -3 must be finite and >= 0, or left at its default");
