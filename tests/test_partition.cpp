@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include <Thyra_TpetraThyraWrappers.hpp>
+#include <Thyra_VectorStdOps.hpp>
 #include <cmath>
 
 #include "perinox/evaluator/Partitioner.hpp"
@@ -205,5 +206,45 @@ TEST(LocalFamilies, EvaluatorWithoutGlobalFamiliesGivesTheSameAnswers) {
     J[0]->getLocalRowView(r, c0, v0);
     J[1]->getLocalRowView(r, c1, v1);
     ASSERT_EQ(std::vector<double>(v0.begin(), v0.end()), std::vector<double>(v1.begin(), v1.end())) << "row " << r;
+  }
+}
+
+// The Jacobian's graph is built in local indices (Assembler::buildOwnedGraph) with the column
+// map Tpetra's fillComplete would make: refilling the same entries by global index and letting
+// fillComplete choose gives the same column map and the same local columns, row by row.
+TEST(JacobianGraph, LocalConstructionEqualsFillingByGlobalIndex) {
+  for (const LatticeSpec& spec : lattices()) {
+    auto P = problemOnLattice(spec, {MaterialKind::Hencky, spec.dim, PlanarMode::PlaneStrain, 1000.0, 0.3});
+    P->stabilization = true;
+    const Side side = spec.dim == 3 ? Side::ZMin : Side::XMin;
+    for (int c = 0; c < spec.dim; ++c) prescribe(*P, selectFictitiousSide(P->disc, side), c);
+    P->disc.familyOffset.clear();
+    P->disc.familyIndex.clear();
+    PeridynamicEvaluator ev(comm(), P);
+    auto x = Thyra::createMember(ev.get_x_space());
+    Thyra::assign(x.ptr(), 0.0);
+    const auto J = ev.assembledJacobian(*x);
+    const auto& graph = *J->getCrsGraph();
+    ASSERT_TRUE(graph.isFillComplete());
+    ASSERT_TRUE(graph.isSorted());
+    const auto rowMap = graph.getRowMap(), colMap = graph.getColMap();
+    auto ref = Teuchos::rcp(new TCrsGraph(rowMap, static_cast<size_t>(graph.getNodeMaxNumRowEntries())));
+    std::vector<GO> gids;
+    for (LO r = 0; r < static_cast<LO>(graph.getNodeNumRows()); ++r) {
+      Teuchos::ArrayView<const LO> cols;
+      graph.getLocalRowView(r, cols);
+      gids.clear();
+      for (LO c : cols) gids.push_back(colMap->getGlobalElement(c));
+      std::reverse(gids.begin(), gids.end());  // fillComplete must sort them itself
+      ref->insertGlobalIndices(rowMap->getGlobalElement(r), Teuchos::ArrayView<const GO>(gids));
+    }
+    ref->fillComplete(graph.getDomainMap(), graph.getRangeMap());
+    ASSERT_TRUE(ref->getColMap()->isSameAs(*colMap)) << "dimension " << spec.dim;
+    for (LO r = 0; r < static_cast<LO>(graph.getNodeNumRows()); ++r) {
+      Teuchos::ArrayView<const LO> a, b;
+      graph.getLocalRowView(r, a);
+      ref->getLocalRowView(r, b);
+      ASSERT_EQ(std::vector<LO>(a.begin(), a.end()), std::vector<LO>(b.begin(), b.end())) << "row " << r;
+    }
   }
 }

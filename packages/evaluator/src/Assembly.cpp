@@ -5,6 +5,7 @@
 #include <Teuchos_CommHelpers.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
+#include <Tpetra_Util.hpp>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
@@ -223,9 +224,10 @@ JacobianGraphs Assembler::buildGraphs(bool neighbours) const {
   for (int i = 0; i < lp.numOwned; ++i) {
     std::vector<int> parts{i};
     for (auto q = lp.famOffset[i]; q < lp.famOffset[i + 1]; ++q) parts.push_back(lp.famIndex[q]);
-    for (int a : parts)
-      for (int b : parts)
-        if (near(lp.X[a], lp.X[b])) adj[a].push_back(b);
+    for (int a : parts)  // only the ghost rows are built here (owned rows: buildOwnedGraph)
+      if (a >= lp.numOwned)
+        for (int b : parts)
+          if (near(lp.X[a], lp.X[b])) adj[a].push_back(b);
   }
   // Ghost-row graph: the rows of the ghost particles' free DOFs (overlap lids from the owned
   // count on), in the overlap's order; its column map is the overlap map.
@@ -276,7 +278,10 @@ JacobianGraphs Assembler::buildGraphs(bool neighbours) const {
 
 // The owned graph, from the families as built (the owned particles' and their ghosts'): row
 // particle p couples to every particle of every element that contains p, i.e. of {i} u H_i for
-// i in {p} u H_p (only those within one horizon of p with neighbours).
+// i in {p} u H_p (only those within one horizon of p with neighbours). The graph is made in local
+// indices directly, with the column map fillComplete would make (the domain map's columns in its
+// order, then the remote ones by owning rank and id), so its entries and their order are those of
+// a graph filled by global indices, without Tpetra's per-row insertion.
 Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   const Discretization& d = problem_.disc;
   const int D = problem_.dim();
@@ -285,12 +290,12 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   auto near = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return !neighbours || (a - b).squaredNorm() <= reach2;
   };
-  std::vector<size_t> nnz;
-  std::vector<std::vector<GO>> rowCols;
-  std::vector<GO> rows;
-  std::vector<long long> S;
   const LocalParticles& lp = model_.particles();
   const LocalFamilies& F = families_;
+  // Columns (free ids, ascending) of each owned particle's rows: partCols[partPtr[l] .. partPtr[l + 1]).
+  std::vector<std::size_t> partPtr{0};
+  std::vector<GO> partCols;
+  std::vector<long long> S;
   auto addElement = [&](int local) {  // {i} u H_i of local particle i
     S.push_back(lp.globalId[local]);
     if (local < lp.numOwned) {
@@ -307,24 +312,61 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
     for (auto q = F.ownedOffset[l]; q < F.ownedOffset[l + 1]; ++q) addElement(F.ownedIndex[q]);
     std::sort(S.begin(), S.end());
     S.erase(std::unique(S.begin(), S.end()), S.end());
-    std::vector<GO> gc;
     for (long long s : S)
       if (near(d.X[p], d.X[s]))
         for (int c = 0; c < D; ++c)
-          if (freeId[s * D + c] >= 0) gc.push_back(freeId[s * D + c]);
-    for (int c = 0; c < D; ++c)
-      if (freeId[p * D + c] >= 0) {
-        nnz.push_back(gc.size());
-        rowCols.push_back(gc);
-        rows.push_back(freeId[p * D + c]);
-      }
+          if (freeId[s * D + c] >= 0) partCols.push_back(freeId[s * D + c]);
+    partPtr.push_back(partCols.size());
   }
-  auto owned = Teuchos::rcp(new TCrsGraph(dofs_.ownedFree, Teuchos::ArrayView<const size_t>(nnz)));
-  for (size_t r = 0; r < rowCols.size(); ++r) owned->insertGlobalIndices(rows[r], Teuchos::ArrayView<const GO>(rowCols[r]));
-  owned->fillComplete(dofs_.ownedFree, dofs_.ownedFree);
-  // The sink's merge needs each row's column lids sorted (Tpetra sorts them when it fills a
-  // graph, but say so if a build ever does not).
-  if (!owned->isSorted()) throw std::logic_error("perinox: the Jacobian graph's rows are not sorted");
+  const auto& rowMap = dofs_.ownedFree;
+  const LO nRows = static_cast<LO>(rowMap->getNodeNumElements());
+  // The column map: the row map's columns present, in its order, then the remote ones.
+  std::vector<char> present(static_cast<std::size_t>(nRows), 0);
+  std::vector<GO> remote;
+  for (GO g : partCols) {
+    const LO k = rowMap->getLocalElement(g);
+    if (k != Teuchos::OrdinalTraits<LO>::invalid()) present[k] = 1;
+    else remote.push_back(g);
+  }
+  std::sort(remote.begin(), remote.end());
+  remote.erase(std::unique(remote.begin(), remote.end()), remote.end());
+  std::vector<int> owner(remote.size());
+  rowMap->getRemoteIndexList(Teuchos::ArrayView<const GO>(remote), Teuchos::ArrayView<int>(owner));
+  // Grouped by owner with Tpetra's own sort2, as its column map does (the order within a group
+  // is that sort's, not necessarily ascending).
+  Tpetra::sort2(owner.begin(), owner.end(), remote.begin());
+  std::vector<GO> colGids;
+  for (LO k = 0; k < nRows; ++k)
+    if (present[k]) colGids.push_back(rowMap->getGlobalElement(k));
+  colGids.insert(colGids.end(), remote.begin(), remote.end());
+  const auto invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+  auto colMap = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(colGids), 0, comm_));
+  // Rows in the row map's order (owned particles ascending, then components), local columns sorted.
+  Teuchos::ArrayRCP<size_t> rowPtr(static_cast<std::size_t>(nRows) + 1, 0);
+  std::size_t entries = 0;
+  for (int l = 0; l < lp.numOwned; ++l)
+    for (int c = 0; c < D; ++c)
+      if (freeId[lp.globalId[l] * D + c] >= 0) entries += partPtr[l + 1] - partPtr[l];
+  Teuchos::ArrayRCP<LO> colInd(entries);
+  std::vector<LO> lids;
+  LO row = 0;
+  std::size_t at = 0;
+  for (int l = 0; l < lp.numOwned; ++l) {
+    lids.clear();
+    for (std::size_t q = partPtr[l]; q < partPtr[l + 1]; ++q) lids.push_back(colMap->getLocalElement(partCols[q]));
+    std::sort(lids.begin(), lids.end());
+    for (int c = 0; c < D; ++c) {
+      if (freeId[lp.globalId[l] * D + c] < 0) continue;
+      if (row >= nRows || rowMap->getGlobalElement(row) != freeId[lp.globalId[l] * D + c])
+        throw std::logic_error("perinox: the Jacobian graph's rows do not follow the solution map");
+      std::copy(lids.begin(), lids.end(), colInd.begin() + static_cast<std::ptrdiff_t>(at));
+      at += lids.size();
+      rowPtr[++row] = at;
+    }
+  }
+  if (row != nRows) throw std::logic_error("perinox: the Jacobian graph has fewer rows than the solution map");
+  auto owned = Teuchos::rcp(new TCrsGraph(rowMap, colMap, rowPtr, colInd));
+  owned->expertStaticFillComplete(rowMap, rowMap);
   return owned;
 }
 
