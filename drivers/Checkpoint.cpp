@@ -38,7 +38,7 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
   agreed(comm, [&] {
     std::ostringstream out;
     out << std::hexfloat;
-    const auto xv = ev.ownedFreeValues(x), pv = ev.ownedFreeValues(xPrevious);
+    const auto xv = ev.ownedDofValues(x), pv = ev.ownedDofValues(xPrevious);
     for (std::size_t k = 0; k < xv.size(); ++k) out << "x " << xv[k].first << ' ' << xv[k].second << ' ' << pv[k].second << '\n';
     for (const auto& [a, b] : ev.ownedBrokenBonds()) out << "bond " << a << ' ' << b << '\n';
     for (const auto& [g, v] : ev.ownedFrozenDofs()) out << "frozen " << g << ' ' << v << '\n';
@@ -71,8 +71,11 @@ nlohmann::json readState(const std::string& dir, const std::string& where) {
     throw std::invalid_argument(where + ": state.json is truncated or damaged (not valid JSON at byte " +
                                 std::to_string(e.byte) + ")");
   }
-  if (state.value("format", 0) != 1 || !state.contains("scene") || !state.contains("ranks"))
-    throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 1)");
+  if (state.value("format", 0) == 1)
+    throw std::invalid_argument(where + ": a checkpoint of format 1 (before session 11: keyed by free-DOF numbers), "
+                                        "which this perinox does not read; rerun from the start or with the perinox that wrote it");
+  if (state.value("format", 0) != 2 || !state.contains("scene") || !state.contains("ranks"))
+    throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 2)");
   return state;
 }
 
@@ -184,8 +187,14 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
   }
 }
 
-/// One rank file's lines ("x GID X XPREV", "bond GID_I GID_J", "frozen GID VALUE") into c.
-void readRankFile(const std::string& f, long long freeDofs, long long particles, Checkpoint& c, const std::string& where) {
+/// One rank file's lines ("x DOF X XPREV", "bond GID_I GID_J", "frozen DOF VALUE") into c; a DOF
+/// must be a free DOF of the scene (particle * dim + component).
+void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, const std::string& where) {
+  const long long particles = P.disc.size();
+  const int D = P.dim();
+  auto freeDof = [&](long long g) {
+    return g >= 0 && g < particles * D && !P.isFixed(static_cast<int>(g / D), static_cast<int>(g % D));
+  };
   std::ifstream in(f);
   if (!in) throw std::invalid_argument(where + ": " + f + " is missing");
   std::string line, kind;
@@ -203,7 +212,7 @@ void readRankFile(const std::string& f, long long freeDofs, long long particles,
     std::string v1, v2;
     bool ok = true;
     if (kind == "x") {
-      ok = static_cast<bool>(ls >> g >> v1 >> v2);
+      ok = static_cast<bool>(ls >> g >> v1 >> v2) && freeDof(g);
       if (ok) {
         c.x.emplace_back(g, number(v1, ok));
         c.xPrevious.emplace_back(g, number(v2, ok));
@@ -212,7 +221,7 @@ void readRankFile(const std::string& f, long long freeDofs, long long particles,
       ok = static_cast<bool>(ls >> g >> h) && g >= 0 && h >= 0 && g < particles && h < particles && g != h;
       if (ok) c.broken.emplace_back(g, h);
     } else if (kind == "frozen") {
-      ok = static_cast<bool>(ls >> g >> v1) && g >= 0 && g < freeDofs;
+      ok = static_cast<bool>(ls >> g >> v1) && freeDof(g);
       if (ok) c.frozen.emplace_back(g, number(v1, ok));
     } else {
       ok = false;
@@ -230,13 +239,14 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   checkSameScene(scene, c.state, where);
   checkStateValues(c.state, scene, particles, where);
   const int ranks = c.state["ranks"];
-  for (int r = 0; r < ranks; ++r) readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", freeDofs, particles, c, where);
+  for (int r = 0; r < ranks; ++r) readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", *scene.problem, c, where);
+  // Every value is of a free DOF (readRankFile): with as many values as free DOFs and none twice,
+  // every free DOF has one.
   std::vector<long long> ids;
   for (const auto& e : c.x) ids.push_back(e.first);
   std::sort(ids.begin(), ids.end());
   const bool complete = static_cast<long long>(ids.size()) == freeDofs &&
-                        std::adjacent_find(ids.begin(), ids.end()) == ids.end() &&
-                        (ids.empty() || (ids.front() == 0 && ids.back() == freeDofs - 1));
+                        std::adjacent_find(ids.begin(), ids.end()) == ids.end();
   if (!complete)
     throw std::invalid_argument(where + " holds " + std::to_string(ids.size()) + " displacement values for " +
                                 std::to_string(freeDofs) + " free DOFs (damaged or from another discretisation)");
@@ -250,7 +260,7 @@ void CheckpointWriter::accepted(const StepInfo& s) {
   Teuchos::broadcast(comm_, 0, Teuchos::outArg(due));  // clocks differ between ranks
   if (!due) return;
   nlohmann::json st;
-  st["format"] = 1;
+  st["format"] = 2;
   st["scene"] = resolvedSceneText(scene_);
   st["step"] = state.step;
   st["lambda"] = state.loadFactor;

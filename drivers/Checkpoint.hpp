@@ -16,11 +16,12 @@
 
 namespace perinox {
 
-/// Everything a load-stepping run needs to go on from a converged step. Vectors, bonds and
-/// frozen DOFs are by global id, so a checkpoint can be resumed on any number of ranks.
-/// Files: state.json (rank 0: counters, step records, probes) and rank_R.txt per writing rank
-/// (lines "x GID X XPREV", "bond GID_I GID_J", "frozen GID VALUE"; doubles in hexadecimal, so a
-/// resumed run starts from bit-identical numbers).
+/// Everything a load-stepping run needs to go on from a converged step. Vectors and frozen DOFs
+/// are by DOF name (particle id * dim + component), bonds by particle ids, so a checkpoint can be
+/// resumed on any number of ranks and any partition (the solution map's free-DOF numbers follow
+/// the ranks and are not kept). Files: state.json (rank 0: format 2, counters, step records,
+/// probes) and rank_R.txt per writing rank (lines "x DOF X XPREV", "bond GID_I GID_J", "frozen
+/// DOF VALUE"; doubles in hexadecimal, so a resumed run starts from bit-identical numbers).
 struct Checkpoint {
   nlohmann::json state;
   std::vector<std::pair<long long, double>> x, xPrevious, frozen;

@@ -217,8 +217,8 @@ std::pair<double, int> resumeFrom(const Checkpoint& resume, PeridynamicEvaluator
     res.probes[k].second = st.at("probes").at(k).get<std::vector<std::pair<double, std::vector<double>>>>();
   evaluator.restoreDamage(resume.broken, st.at("detached").get<std::vector<long long>>(), resume.frozen);
   auto xc = Thyra::createMember(evaluator.get_x_space()), xp = Thyra::createMember(evaluator.get_x_space());
-  evaluator.setOwnedFreeValues(*xc, resume.x);
-  evaluator.setOwnedFreeValues(*xp, resume.xPrevious);
+  evaluator.setOwnedDofValues(*xc, resume.x);
+  evaluator.setOwnedDofValues(*xp, resume.xPrevious);
   stepper.resume(ss, std::move(records), st.at("path_load_factors").get<std::vector<double>>(), *xc, *xp);
   if (evaluator.comm()->getRank() == 0 && !options.quiet)
     std::cout << "resumed from " << options.restartFrom << " after step " << ss.step << " at load factor "

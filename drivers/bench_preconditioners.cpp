@@ -146,7 +146,6 @@ struct Problem {
   // All-DOF map: every DOF of the owned particles, gid = particle * dim + component.
   RCP<const TMap> allMap, nodeMap;      // nodeMap: owned particles (gid = particle id)
   std::vector<LO> freeToAll;            // owned free lid -> all-DOF lid
-  std::vector<GO> freeGidToAll;         // replicated: free gid -> all-DOF gid
   double tResidual = 0, tMatvec = 0, tAssemble = 0, tJvMf = 0;
   long long realParticles = 0;
   // The matrix-free analytic product J v (a second evaluator in matrix-free mode, at x).
@@ -187,10 +186,9 @@ void setState(const Scene& scene, const PeridynamicEvaluator& ev, const std::str
   const ProblemSpec& P = ev.problem();
   for (long long p : ev.ownedParticles())
     for (int c = 0; c < P.dim(); ++c) {
-      const long long g = ev.freeDof(p, c);
-      if (g >= 0) values.emplace_back(g, scene.reference.displacement(P.disc.X[p], c));
+      if (ev.freeDof(p, c) >= 0) values.emplace_back(p * P.dim() + c, scene.reference.displacement(P.disc.X[p], c));
     }
-  ev.setOwnedFreeValues(x, values);
+  ev.setOwnedDofValues(x, values);
 }
 
 /// The all-DOF copy of a free-DOF matrix A (rows and columns of the free DOFs, the same map as
@@ -207,6 +205,14 @@ RCP<TCrsMatrix> toAllDofs(const Problem& pb, const TCrsMatrix& A, const std::vec
   std::vector<GO> colGids;
   colGids.reserve(nAll + Acol->getNodeNumElements());
   for (LO r = 0; r < nAll; ++r) colGids.push_back(pb.allMap->getGlobalElement(r));
+  // The all-DOF gid of every column, from its owner (exact as doubles below 2^53).
+  TVector names(Adom), colNames(Acol);
+  {
+    auto nd = names.getDataNonConst();
+    for (std::size_t k = 0; k < pb.freeToAll.size(); ++k) nd[k] = static_cast<double>(pb.allMap->getGlobalElement(pb.freeToAll[k]));
+  }
+  colNames.doImport(names, Tpetra::Import<LO, GO>(Adom, Acol), Tpetra::INSERT);
+  const auto cn = colNames.getData();
   std::vector<LO> colOf(Acol->getNodeNumElements());
   for (LO j = 0; j < static_cast<LO>(Acol->getNodeNumElements()); ++j) {
     const GO g = Acol->getGlobalElement(j);
@@ -215,7 +221,7 @@ RCP<TCrsMatrix> toAllDofs(const Problem& pb, const TCrsMatrix& A, const std::vec
       colOf[j] = pb.freeToAll[own];
     } else {
       colOf[j] = static_cast<LO>(colGids.size());
-      colGids.push_back(pb.freeGidToAll[g]);
+      colGids.push_back(static_cast<GO>(cn[j]));
     }
   }
   auto colMap = rcp(new TMap(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(), colGids.data(),
@@ -386,7 +392,7 @@ RCP<TCrsMatrix> q1Matrix(const Problem& pb, const std::vector<double>& diag) {
         if (ev.freeDof(p, c) < 0) continue;
         for (int a = 0; a < nn; ++a)
           for (int e = 0; e < D; ++e) {
-            if (ev.freeDof(nodes[a], e) < 0) continue;  // eliminated
+            if (P.isFixed(nodes[a], e)) continue;  // eliminated (a node need not be local)
             row[c][static_cast<GO>(nodes[a]) * D + e] += Ke(me * D + c, a * D + e);
           }
       }
@@ -712,11 +718,6 @@ Problem buildProblem(const RCP<const Teuchos::Comm<int>>& comm, const std::strin
   const auto inv = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
   pb.allMap = rcp(new TMap(inv, all.data(), all.size(), 0, comm));
   pb.nodeMap = rcp(new TMap(inv, nodes.data(), nodes.size(), 0, comm));
-  pb.freeGidToAll.assign(ev.numFreeDofs(), -1);
-  const long long n = ev.problem().disc.size();
-  for (long long p = 0; p < n; ++p)
-    for (int c = 0; c < D; ++c)
-      if (ev.freeDof(p, c) >= 0) pb.freeGidToAll[ev.freeDof(p, c)] = p * D + c;
   auto fm = ev.ownedFreeMap();
   pb.freeToAll.assign(fm->getNodeNumElements(), -1);
   const auto& owned = ev.ownedParticles();

@@ -86,13 +86,13 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
 
   // 4. Solve. Piro's input x is Newton's initial guess, the solution its last response. From zero the
   //    whole pull sits on the bonds next to the right layer and Newton inverts particles: start from
-  //    the uniform stretch u = (0.1 X, 0) (free DOFs are numbered by the evaluator: freeDof).
+  //    the uniform stretch u = (0.1 X, 0) (DOFs named particle * dim + component; prescribed ones
+  //    are skipped).
   auto guess = Thyra::createMember(evaluator->get_x_space());
   Thyra::assign(guess.ptr(), 0.0);
   std::vector<std::pair<long long, double>> stretch;
-  for (long long p : evaluator->ownedParticles())
-    if (evaluator->freeDof(p, 0) >= 0) stretch.push_back({evaluator->freeDof(p, 0), 0.1 * d.X[p][0]});
-  evaluator->setOwnedFreeValues(*guess, stretch);
+  for (long long p : evaluator->ownedParticles()) stretch.push_back({p * d.dim + 0, 0.1 * d.X[p][0]});
+  evaluator->setOwnedDofValues(*guess, stretch);
   auto in = solver.createInArgs();
   in.set_x(guess);
   auto out = solver.createOutArgs();

@@ -72,13 +72,22 @@ std::shared_ptr<ProblemSpec> makeProblem(int dim, double factor, double G, bool 
 }
 
 /// Deterministic, partition-independent random vectors: seeded by the global DOF id.
-void fill(Thyra::VectorBase<double>& z, unsigned seed, double amp) {
-  auto t = TOE::getTpetraVector(Teuchos::rcpFromRef(z));
-  auto d = t->getDataNonConst();
-  for (size_t k = 0; k < t->getLocalLength(); ++k) {
-    std::mt19937 g(seed * 1000003u + static_cast<unsigned>(t->getMap()->getGlobalElement(k)));
-    d[k] = amp * std::uniform_real_distribution<double>(-1, 1)(g);
+/// Random values on ev's free DOFs, each seeded by the DOF's place among all free DOFs in
+/// particle order (what the solution map's numbering was before it followed the ranks), so the
+/// same on any rank count and partition, and the same as these tests always had.
+void fill(const PeridynamicEvaluator& ev, Thyra::VectorBase<double>& z, unsigned seed, double amp) {
+  const ProblemSpec& P = ev.problem();
+  std::vector<long long> place(static_cast<std::size_t>(P.disc.size()) * P.dim(), -1);  // a test may hold this
+  long long next = 0;
+  for (int p = 0; p < P.disc.size(); ++p)
+    for (int c = 0; c < P.dim(); ++c)
+      if (!P.isFixed(p, c)) place[static_cast<std::size_t>(p) * P.dim() + c] = next++;
+  auto values = ev.ownedDofValues(z);
+  for (auto& [dof, v] : values) {
+    std::mt19937 g(seed * 1000003u + static_cast<unsigned>(place[dof]));
+    v = amp * std::uniform_real_distribution<double>(-1, 1)(g);
   }
+  ev.setOwnedDofValues(z, values);
 }
 
 struct Case {
@@ -115,9 +124,9 @@ TEST_P(EvaluatorFD, JacobianMatchesDirectionalDifferencesAndIsSymmetric) {
   ev->setLoadFactor(0.7);
   auto space = ev->get_x_space();
   auto x = Thyra::createMember(space), v = Thyra::createMember(space), w = Thyra::createMember(space);
-  fill(*x, 1, 0.03);
-  fill(*v, 2, 1.0);
-  fill(*w, 3, 1.0);
+  fill(*ev, *x, 1, 0.03);
+  fill(*ev, *v, 2, 1.0);
+  fill(*ev, *w, 3, 1.0);
 
   auto W = ev->create_W_op();
   auto f0 = Thyra::createMember(space);
@@ -174,8 +183,8 @@ TEST_P(EvaluatorFD, MatrixFreeProductsMatchAssembledJacobian) {
   auto assembled = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
   auto space = assembled->get_x_space();
   auto x = Thyra::createMember(space), v = Thyra::createMember(space);
-  fill(*x, 4, 0.02);
-  fill(*v, 5, 1.0);
+  fill(*assembled, *x, 4, 0.02);
+  fill(*assembled, *v, 5, 1.0);
   assembled->setLoadFactor(0.7);
   auto W = assembled->assembledJacobian(*x);
   auto Wt = Thyra::createConstLinearOp<double, LO, GO, Node>(W, space, space);
@@ -215,8 +224,8 @@ TEST(EvaluatorReaction, KeptNormMatchesFreshEvaluation) {
   auto fresh = Teuchos::rcp(new PeridynamicEvaluator(comm, problem));
   auto space = ev->get_x_space();
   auto x1 = Thyra::createMember(space), x2 = Thyra::createMember(space), f = Thyra::createMember(space);
-  fill(*x1, 7, 0.01);
-  fill(*x2, 8, 0.01);
+  fill(*fresh, *x1, 7, 0.01);
+  fill(*fresh, *x2, 8, 0.01);
   auto check = [&](const Thyra::VectorBase<double>& x, const char* what) {
     fresh->setLoadFactor(ev->loadFactor());
     const double want = fresh->reactionNorm(x);
@@ -323,13 +332,13 @@ TEST(ProblemValidation, StabilizationConstantIsComputedByTheLibrary) {
     auto ev = Teuchos::rcp(new PeridynamicEvaluator(comm, P));
     ev->setLoadFactor(0.7);
     auto x = Thyra::createMember(ev->get_x_space()), f = Thyra::createMember(ev->get_x_space());
-    fill(*x, 1, 0.03);
+    fill(*ev, *x, 1, 0.03);
     auto in = ev->createInArgs();
     in.set_x(x);
     auto out = ev->createOutArgs();
     out.set_f(f);
     ev->evalModel(in, out);
-    return ev->ownedFreeValues(*f);
+    return ev->ownedDofValues(*f);
   };
   EXPECT_EQ(residual(computed), residual(given));
   auto negative = std::make_shared<ProblemSpec>(*computed);
@@ -389,7 +398,7 @@ TEST(LoadFactorParameter, EvaluationWithPAndDfDpTaylorTest) {
     ASSERT_EQ(ev->createInArgs().Np(), 1);
     EXPECT_EQ((*ev->get_p_names(0))[0], "Load Factor");
     auto x = Thyra::createMember(ev->get_x_space());
-    fill(*x, 7, 1e-3);
+    fill(*ev, *x, 7, 1e-3);
     auto inAt = [&](double lambda) {
       auto in = ev->createInArgs();
       in.set_x(x);

@@ -25,37 +25,67 @@ using TOE = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, Node>;
 // ---------------------------------------------------------------------------------------------
 
 DofMaps::DofMaps(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const ProblemSpec& P, const LocalParticles& lp) {
-  const Discretization& d = P.disc;
   const int D = P.dim();
-  const long long n = d.size();
-  freeId.assign(static_cast<std::size_t>(n) * D, -1);
-  for (long long p = 0; p < n; ++p)
-    for (int c = 0; c < D; ++c)
-      if (!P.isFixed(static_cast<int>(p), c)) freeId[p * D + c] = numFree++;
-
   const int nLocal = lp.size();
+  // The owned free DOFs: this rank's offset (the free DOFs of the ranks before it) + local order.
+  long long mine = 0, upTo = 0;
+  for (int l = 0; l < lp.numOwned; ++l)
+    for (int c = 0; c < D; ++c) mine += !P.isFixed(static_cast<int>(lp.globalId[l]), c);
+  Teuchos::scan(*comm, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(upTo));
+  Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(numFree));
+  long long next = upTo - mine;
   const auto invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
-  std::vector<GO> ownedFreeG, overlapFreeG, ownedAllG, overlapAllG;
-  overlapFreeLid.assign(static_cast<std::size_t>(nLocal) * D, -1);
+  std::vector<GO> ownedAllG, overlapAllG;
   for (int l = 0; l < nLocal; ++l)
     for (int c = 0; c < D; ++c) {
-      const GO g = lp.globalId[l];
-      overlapAllG.push_back(g * D + c);
-      if (l < lp.numOwned) ownedAllG.push_back(g * D + c);
-      const long long f = freeId[g * D + c];
-      if (f >= 0) {
-        overlapFreeLid[l * D + c] = static_cast<int>(overlapFreeG.size());
-        overlapFreeG.push_back(f);
-        if (l < lp.numOwned) ownedFreeG.push_back(f);
-      }
+      overlapAllG.push_back(lp.globalId[l] * D + c);
+      if (l < lp.numOwned) ownedAllG.push_back(lp.globalId[l] * D + c);
     }
-  ownedFree = Teuchos::rcp(new TMap(numFree, Teuchos::ArrayView<const GO>(ownedFreeG), 0, comm));
-  overlapFree = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(overlapFreeG), 0, comm));
-  ownedAll = Teuchos::rcp(new TMap(static_cast<Tpetra::global_size_t>(d.size()) * D,
+  ownedAll = Teuchos::rcp(new TMap(static_cast<Tpetra::global_size_t>(P.disc.size()) * D,
                                    Teuchos::ArrayView<const GO>(ownedAllG), 0, comm));
   overlapAll = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(overlapAllG), 0, comm));
   allImport = Teuchos::rcp(new Tpetra::Import<LO, GO>(ownedAll, overlapAll));
   allExport = Teuchos::rcp(new Tpetra::Export<LO, GO>(overlapAll, ownedAll));
+  // The owners' numbers, carried to the ghosts (exact as doubles below 2^53).
+  freeIdOwned = Teuchos::rcp(new TVector(ownedAll));
+  {
+    auto v = freeIdOwned->getDataNonConst();
+    for (int l = 0; l < lp.numOwned; ++l)
+      for (int c = 0; c < D; ++c)
+        v[l * D + c] = P.isFixed(static_cast<int>(lp.globalId[l]), c) ? -1.0 : static_cast<double>(next++);
+  }
+  TVector ghosted(overlapAll);
+  ghosted.doImport(*freeIdOwned, *allImport, Tpetra::INSERT);
+  const auto gv = ghosted.getData();
+  overlapFreeGid.assign(static_cast<std::size_t>(nLocal) * D, -1);
+  overlapFreeLid.assign(static_cast<std::size_t>(nLocal) * D, -1);
+  std::vector<GO> ownedFreeG, overlapFreeG;
+  for (int l = 0; l < nLocal; ++l)
+    for (int c = 0; c < D; ++c) {
+      const long long f = static_cast<long long>(gv[l * D + c]);
+      overlapFreeGid[l * D + c] = f;
+      if (f >= 0) {
+        overlapFreeLid[l * D + c] = static_cast<int>(overlapFreeG.size());
+        overlapFreeG.push_back(f);
+        if (l < lp.numOwned) {
+          ownedFreeG.push_back(f);
+          ownedFreeDof.push_back(lp.globalId[l] * D + c);
+        }
+      }
+    }
+  ownedFree = Teuchos::rcp(new TMap(numFree, Teuchos::ArrayView<const GO>(ownedFreeG), 0, comm));
+  overlapFree = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(overlapFreeG), 0, comm));
+}
+
+std::vector<long long> DofMaps::freeIdsOf(const std::vector<GO>& dofs) const {
+  const auto invalid = Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid();
+  auto target = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(dofs), 0, ownedAll->getComm()));
+  TVector v(target);
+  v.doImport(*freeIdOwned, Tpetra::Import<LO, GO>(ownedAll, target), Tpetra::INSERT);
+  const auto d = v.getData();
+  std::vector<long long> out(dofs.size());
+  for (std::size_t k = 0; k < dofs.size(); ++k) out[k] = static_cast<long long>(d[k]);
+  return out;
 }
 
 Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> DofMaps::rigidBodyModes(const ProblemSpec& problem,
@@ -285,16 +315,15 @@ JacobianGraphs Assembler::buildGraphs(bool neighbours) const {
 Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   const Discretization& d = problem_.disc;
   const int D = problem_.dim();
-  const std::vector<long long>& freeId = dofs_.freeId;
   const double reach2 = d.horizon * d.horizon * (1.0 + 1e-10);
   auto near = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return !neighbours || (a - b).squaredNorm() <= reach2;
   };
   const LocalParticles& lp = model_.particles();
   const LocalFamilies& F = families_;
-  // Columns (free ids, ascending) of each owned particle's rows: partCols[partPtr[l] .. partPtr[l + 1]).
+  // Particles of each owned particle's rows (ids ascending): partNbr[partPtr[l] .. partPtr[l + 1]).
   std::vector<std::size_t> partPtr{0};
-  std::vector<GO> partCols;
+  std::vector<long long> partNbr;
   std::vector<long long> S;
   auto addElement = [&](int local) {  // {i} u H_i of local particle i
     S.push_back(lp.globalId[local]);
@@ -313,11 +342,32 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
     std::sort(S.begin(), S.end());
     S.erase(std::unique(S.begin(), S.end()), S.end());
     for (long long s : S)
-      if (near(d.X[p], d.X[s]))
-        for (int c = 0; c < D; ++c)
-          if (freeId[s * D + c] >= 0) partCols.push_back(freeId[s * D + c]);
-    partPtr.push_back(partCols.size());
+      if (near(d.X[p], d.X[s])) partNbr.push_back(s);
+    partPtr.push_back(partNbr.size());
   }
+  // Their free ids, from their owners (the particles two horizons away need not be local).
+  std::vector<long long> reach(partNbr);
+  std::sort(reach.begin(), reach.end());
+  reach.erase(std::unique(reach.begin(), reach.end()), reach.end());
+  std::vector<GO> reachDofs;
+  reachDofs.reserve(reach.size() * D);
+  for (long long s : reach)
+    for (int c = 0; c < D; ++c) reachDofs.push_back(s * D + c);
+  const std::vector<long long> reachFree = dofs_.freeIdsOf(reachDofs);
+  auto freeOf = [&](long long s, int c) {
+    const auto k = std::lower_bound(reach.begin(), reach.end(), s) - reach.begin();
+    return reachFree[static_cast<std::size_t>(k) * D + c];
+  };
+  std::vector<GO> partCols;  // the same, as free ids
+  std::vector<std::size_t> colPtr{0};
+  for (int l = 0; l < lp.numOwned; ++l) {
+    for (std::size_t q = partPtr[l]; q < partPtr[l + 1]; ++q)
+      for (int c = 0; c < D; ++c)
+        if (freeOf(partNbr[q], c) >= 0) partCols.push_back(freeOf(partNbr[q], c));
+    colPtr.push_back(partCols.size());
+  }
+  partPtr.swap(colPtr);
+  std::vector<long long>().swap(partNbr);
   const auto& rowMap = dofs_.ownedFree;
   const LO nRows = static_cast<LO>(rowMap->getNodeNumElements());
   // The column map: the row map's columns present, in its order, then the remote ones.
@@ -346,7 +396,7 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   std::size_t entries = 0;
   for (int l = 0; l < lp.numOwned; ++l)
     for (int c = 0; c < D; ++c)
-      if (freeId[lp.globalId[l] * D + c] >= 0) entries += partPtr[l + 1] - partPtr[l];
+      if (dofs_.overlapFreeGid[l * D + c] >= 0) entries += partPtr[l + 1] - partPtr[l];
   Teuchos::ArrayRCP<LO> colInd(entries);
   std::vector<LO> lids;
   LO row = 0;
@@ -356,8 +406,9 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
     for (std::size_t q = partPtr[l]; q < partPtr[l + 1]; ++q) lids.push_back(colMap->getLocalElement(partCols[q]));
     std::sort(lids.begin(), lids.end());
     for (int c = 0; c < D; ++c) {
-      if (freeId[lp.globalId[l] * D + c] < 0) continue;
-      if (row >= nRows || rowMap->getGlobalElement(row) != freeId[lp.globalId[l] * D + c])
+      const long long f = dofs_.overlapFreeGid[l * D + c];
+      if (f < 0) continue;
+      if (row >= nRows || rowMap->getGlobalElement(row) != f)
         throw std::logic_error("perinox: the Jacobian graph's rows do not follow the solution map");
       std::copy(lids.begin(), lids.end(), colInd.begin() + static_cast<std::ptrdiff_t>(at));
       at += lids.size();

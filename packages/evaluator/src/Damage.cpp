@@ -56,7 +56,7 @@ std::vector<std::pair<long long, long long>> DamageBookkeeping::ownedBrokenBonds
 
 std::vector<std::pair<long long, double>> DamageBookkeeping::ownedFrozenDofs() const {
   std::vector<std::pair<long long, double>> out;
-  for (const auto& [lid, value] : frozen_.dofs) out.emplace_back(dofs_.ownedFree->getGlobalElement(lid), value);
+  for (const auto& [lid, value] : frozen_.dofs) out.emplace_back(dofs_.ownedFreeDof[lid], value);
   return out;
 }
 
@@ -82,9 +82,11 @@ void DamageBookkeeping::restore(const std::vector<std::pair<long long, long long
   }
   detachedAll_ = ids;
   frozen_.dofs.clear();
-  for (const auto& [gid, value] : frozen) {
-    const LO lid = dofs_.ownedFree->getLocalElement(gid);
-    if (lid != Teuchos::OrdinalTraits<LO>::invalid()) frozen_.dofs.emplace_back(lid, value);
+  const int D = problem_.dim();
+  for (const auto& [dof, value] : frozen) {
+    const int l = dof < 0 ? -1 : lp.ownedLocal(dof / D);
+    const int lid = l < 0 ? -1 : dofs_.overlapFreeLid[static_cast<std::size_t>(l) * D + static_cast<int>(dof % D)];
+    if (lid >= 0) frozen_.dofs.emplace_back(lid, value);
   }
 }
 

@@ -427,21 +427,39 @@ void PeridynamicEvaluator::restoreDamage(const std::vector<std::pair<long long, 
   damage_->restore(broken, detached, frozen);
 }
 
-std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedFreeValues(const Thyra::VectorBase<double>& x) const {
+std::vector<std::pair<long long, double>> PeridynamicEvaluator::ownedDofValues(const Thyra::VectorBase<double>& x) const {
   auto xd = TOE::getConstTpetraVector(Teuchos::rcpFromRef(x))->getData();
   std::vector<std::pair<long long, double>> out;
   out.reserve(xd.size());
-  for (LO l = 0; l < static_cast<LO>(xd.size()); ++l) out.emplace_back(dofs_.ownedFree->getGlobalElement(l), xd[l]);
+  for (LO l = 0; l < static_cast<LO>(xd.size()); ++l) out.emplace_back(dofs_.ownedFreeDof[l], xd[l]);
   return out;
 }
 
-void PeridynamicEvaluator::setOwnedFreeValues(Thyra::VectorBase<double>& x,
-                                              const std::vector<std::pair<long long, double>>& values) const {
+void PeridynamicEvaluator::setOwnedDofValues(Thyra::VectorBase<double>& x,
+                                             const std::vector<std::pair<long long, double>>& values) const {
   auto xd = TOE::getTpetraVector(Teuchos::rcpFromRef(x))->getDataNonConst();
-  for (const auto& [gid, value] : values) {
-    const LO l = dofs_.ownedFree->getLocalElement(gid);
-    if (l != Teuchos::OrdinalTraits<LO>::invalid()) xd[l] = value;
+  const int D = problem_->dim();
+  const LocalParticles& lp = model_->particles();
+  for (const auto& [dof, value] : values) {
+    if (dof < 0) continue;
+    const int l = lp.ownedLocal(dof / D);
+    if (l < 0) continue;
+    const int lid = dofs_.overlapFreeLid[static_cast<std::size_t>(l) * D + static_cast<int>(dof % D)];
+    if (lid >= 0) xd[lid] = value;  // owned particles' overlap lids are their owned lids
   }
+}
+
+long long PeridynamicEvaluator::freeDof(long long p, int c) const {
+  const LocalParticles& lp = model_->particles();
+  int l = lp.ownedLocal(p);
+  if (l < 0) {
+    const auto end = lp.globalId.end(), it = std::lower_bound(lp.globalId.begin() + lp.numOwned, end, p);
+    if (it == end || *it != p)
+      throw std::out_of_range("perinox: freeDof: particle " + std::to_string(p) + " is neither owned by rank " +
+                              std::to_string(comm_->getRank()) + " nor one of its ghosts");
+    l = static_cast<int>(it - lp.globalId.begin());
+  }
+  return dofs_.overlapFreeGid[static_cast<std::size_t>(l) * problem_->dim() + c];
 }
 
 // ---------------------------------------------------------------------------------------------

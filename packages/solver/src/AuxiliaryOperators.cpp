@@ -263,7 +263,7 @@ class LatticeFemSource final : public AuxiliarySource {
           if (ev.freeDof(p, c) < 0) continue;
           for (int a = 0; a < nn; ++a)
             for (int e = 0; e < D; ++e)
-              if (ev.freeDof(nodes[a], e) >= 0)  // prescribed columns eliminated
+              if (!P.isFixed(nodes[a], e))  // prescribed columns eliminated (a node need not be local)
                 row[c][static_cast<GO>(nodes[a]) * D + e] += scale * K(me * D + c, a * D + e);
         }
       }

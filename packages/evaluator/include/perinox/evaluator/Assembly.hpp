@@ -28,16 +28,23 @@ using TCrsGraph = Tpetra::CrsGraph<LO, GO>;
 using TCrsMatrix = Tpetra::CrsMatrix<double, LO, GO>;
 
 /// The unknowns and the maps between them. The solution map holds the free DOFs of the owned
-/// particles (prescribed DOFs are not unknowns), numbered particle by particle in global order;
-/// the "all" maps hold every DOF of the owned (ownedAll) and of the local, ghosts included
-/// (overlapAll), particles. allImport carries displacements to the ghosts, allExport element
-/// residuals back to the owners (ADD).
+/// particles (prescribed DOFs are not unknowns), numbered rank by rank: rank r's come after those
+/// of ranks 0..r-1, in its owned particles' order (component fastest), so no rank needs a
+/// numbering of the whole body; a ghost's numbers come from its owner (imported). The "all" maps
+/// hold every DOF, numbered particle * dim + c, of the owned (ownedAll) and of the local, ghosts
+/// included (overlapAll), particles. allImport carries displacements to the ghosts, allExport
+/// element residuals back to the owners (ADD).
 struct DofMaps {
   DofMaps() = default;
   DofMaps(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const ProblemSpec& problem, const LocalParticles& particles);
   long long numFree = 0;
-  std::vector<long long> freeId;    // replicated: (particle * dim + c) -> global free id or -1
+  std::vector<long long> overlapFreeGid;  // local (particle * dim + c) -> global free id or -1
   std::vector<int> overlapFreeLid;  // local (particle * dim + c) -> overlapFree lid or -1
+  std::vector<GO> ownedFreeDof;     // owned free lid -> particle * dim + c
+  /// Global free ids of any DOFs (particle * dim + c, owned anywhere; collective), -1 where
+  /// prescribed: what the Jacobian graph needs for its columns two horizons away.
+  std::vector<long long> freeIdsOf(const std::vector<GO>& dofs) const;
+  Teuchos::RCP<TVector> freeIdOwned;  // on ownedAll: the owned DOFs' global free ids, -1 prescribed
   Teuchos::RCP<const TMap> ownedFree, overlapFree, ownedAll, overlapAll;
   Teuchos::RCP<Tpetra::Import<LO, GO>> allImport;
   Teuchos::RCP<Tpetra::Export<LO, GO>> allExport;

@@ -121,15 +121,18 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   // --- checkpoints (restart of long runs) ---
   /// Bonds of the owned particles broken so far, as (owned particle, neighbour) global ids.
   std::vector<std::pair<long long, long long>> ownedBrokenBonds() const;
-  /// The owned free DOFs of x as (global free DOF id, value).
-  std::vector<std::pair<long long, double>> ownedFreeValues(const Thyra::VectorBase<double>& x) const;
-  /// Sets the owned free DOFs of x from (global free DOF id, value) pairs (others are ignored).
-  void setOwnedFreeValues(Thyra::VectorBase<double>& x, const std::vector<std::pair<long long, double>>& values) const;
-  /// Frozen DOFs of the owned detached particles: (global free DOF id, frozen value).
+  // DOFs are named particle * dim + component (global particle id): a name that does not depend
+  // on the rank count or the partition, unlike the free-DOF numbering of the solution map.
+  /// The owned free DOFs of x as (particle * dim + component, value).
+  std::vector<std::pair<long long, double>> ownedDofValues(const Thyra::VectorBase<double>& x) const;
+  /// Sets the owned free DOFs of x from (particle * dim + component, value) pairs; pairs of other
+  /// ranks' or of prescribed DOFs are ignored.
+  void setOwnedDofValues(Thyra::VectorBase<double>& x, const std::vector<std::pair<long long, double>>& values) const;
+  /// Frozen DOFs of the owned detached particles: (particle * dim + component, frozen value).
   std::vector<std::pair<long long, double>> ownedFrozenDofs() const;
   /// Restores the damage of a checkpoint on a fresh evaluator (every rank, the same arguments):
   /// removes the bonds (global id pairs, either order), detaches the particles and freezes their
-  /// owned DOFs at the given values (global free DOF id -> value).
+  /// owned DOFs at the given values (particle * dim + component -> value).
   void restoreDamage(const std::vector<std::pair<long long, long long>>& broken, const std::vector<long long>& detached,
                      const std::vector<std::pair<long long, double>>& frozen);
   /// Damage index of the owned particles.
@@ -148,8 +151,10 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   long long numFreeDofs() const { return dofs_.numFree; }
   Teuchos::RCP<const TMap> ownedFreeMap() const { return dofs_.ownedFree; }
   Teuchos::RCP<const Teuchos::Comm<int>> comm() const { return comm_; }
-  /// Global free DOF id of (particle, component), or -1 if prescribed.
-  long long freeDof(long long p, int c) const { return dofs_.freeId[p * problem_->dim() + c]; }
+  /// Global free DOF id (the solution map's numbering) of component c of particle p, which must
+  /// be local to this rank (owned, or a ghost), or -1 if prescribed. Throws std::out_of_range for
+  /// a particle this rank does not hold (no rank holds a numbering of the whole body).
+  long long freeDof(long long p, int c) const;
 
  private:
   Thyra::ModelEvaluatorBase::OutArgs<double> createOutArgsImpl() const override;
