@@ -71,7 +71,6 @@ std::shared_ptr<ProblemSpec> makeProblem(int dim, double factor, double G, bool 
   return P;
 }
 
-/// Deterministic, partition-independent random vectors: seeded by the global DOF id.
 /// Random values on ev's free DOFs, each seeded by the DOF's place among all free DOFs in
 /// particle order (what the solution map's numbering was before it followed the ranks), so the
 /// same on any rank count and partition, and the same as these tests always had.

@@ -310,7 +310,7 @@ JacobianGraphs Assembler::buildGraphs(bool neighbours) const {
 // particle p couples to every particle of every element that contains p, i.e. of {i} u H_i for
 // i in {p} u H_p (only those within one horizon of p with neighbours). The graph is made in local
 // indices directly, with the column map fillComplete would make (the domain map's columns in its
-// order, then the remote ones by owning rank and id), so its entries and their order are those of
+// order, then the remote ones grouped by owning rank with Tpetra::sort2), so its entries and their order are those of
 // a graph filled by global indices, without Tpetra's per-row insertion.
 Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   const Discretization& d = problem_.disc;
@@ -362,8 +362,10 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
   std::vector<std::size_t> colPtr{0};
   for (int l = 0; l < lp.numOwned; ++l) {
     for (std::size_t q = partPtr[l]; q < partPtr[l + 1]; ++q)
-      for (int c = 0; c < D; ++c)
-        if (freeOf(partNbr[q], c) >= 0) partCols.push_back(freeOf(partNbr[q], c));
+      for (int c = 0; c < D; ++c) {
+        const long long f = freeOf(partNbr[q], c);
+        if (f >= 0) partCols.push_back(f);
+      }
     colPtr.push_back(partCols.size());
   }
   partPtr.swap(colPtr);

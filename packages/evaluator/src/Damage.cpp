@@ -84,8 +84,7 @@ void DamageBookkeeping::restore(const std::vector<std::pair<long long, long long
   frozen_.dofs.clear();
   const int D = problem_.dim();
   for (const auto& [dof, value] : frozen) {
-    const int l = dof < 0 ? -1 : lp.ownedLocal(dof / D);
-    const int lid = l < 0 ? -1 : dofs_.overlapFreeLid[static_cast<std::size_t>(l) * D + static_cast<int>(dof % D)];
+    const int lid = dofs_.ownedFreeLidOf(lp, dof, D);
     if (lid >= 0) frozen_.dofs.emplace_back(lid, value);
   }
 }

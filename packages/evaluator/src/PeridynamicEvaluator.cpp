@@ -441,11 +441,8 @@ void PeridynamicEvaluator::setOwnedDofValues(Thyra::VectorBase<double>& x,
   const int D = problem_->dim();
   const LocalParticles& lp = model_->particles();
   for (const auto& [dof, value] : values) {
-    if (dof < 0) continue;
-    const int l = lp.ownedLocal(dof / D);
-    if (l < 0) continue;
-    const int lid = dofs_.overlapFreeLid[static_cast<std::size_t>(l) * D + static_cast<int>(dof % D)];
-    if (lid >= 0) xd[lid] = value;  // owned particles' overlap lids are their owned lids
+    const int lid = dofs_.ownedFreeLidOf(lp, dof, D);
+    if (lid >= 0) xd[lid] = value;
   }
 }
 

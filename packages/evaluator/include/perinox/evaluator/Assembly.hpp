@@ -41,6 +41,13 @@ struct DofMaps {
   std::vector<long long> overlapFreeGid;  // local (particle * dim + c) -> global free id or -1
   std::vector<int> overlapFreeLid;  // local (particle * dim + c) -> overlapFree lid or -1
   std::vector<GO> ownedFreeDof;     // owned free lid -> particle * dim + c
+  /// The owned free lid of the DOF named dof (particle * dim + c), or -1 when that particle is
+  /// not owned here or the DOF is prescribed (the inverse of ownedFreeDof).
+  int ownedFreeLidOf(const LocalParticles& particles, long long dof, int dim) const {
+    const int l = dof < 0 ? -1 : particles.ownedLocal(dof / dim);
+    // owned particles' overlap lids are their owned lids
+    return l < 0 ? -1 : overlapFreeLid[static_cast<std::size_t>(l) * dim + static_cast<int>(dof % dim)];
+  }
   /// Global free ids of any DOFs (particle * dim + c, owned anywhere; collective), -1 where
   /// prescribed: what the Jacobian graph needs for its columns two horizons away.
   std::vector<long long> freeIdsOf(const std::vector<GO>& dofs) const;
