@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/io/OutputFolder.hpp"
 
 namespace perinox {
@@ -26,14 +27,10 @@ void agreed(const Teuchos::Comm<int>& comm, F&& f) {
     msg = e.what();
     if (msg.empty()) msg = "unknown error";
   }
-  const int rank = comm.getRank(), size = comm.getSize();
-  int mine = msg.empty() ? size : rank, first = size;
-  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(first));
+  const int size = comm.getSize();
+  int first = size;
+  msg = lowestRankMessage(comm, msg, &first);
   if (first == size) return;
-  int length = static_cast<int>(msg.size());
-  Teuchos::broadcast(comm, first, Teuchos::outArg(length));
-  msg.resize(length);
-  if (length > 0) Teuchos::broadcast(comm, first, length, msg.data());
   if (msg.rfind("--", 0) == 0) throw OutputPathError(msg);  // already names its option
   throw OutputPathError("writing the results failed" + (size > 1 ? " on rank " + std::to_string(first) : std::string()) +
                         ": " + msg);

@@ -95,7 +95,8 @@ std::map<std::string, std::pair<std::string, std::string>> physicsValues(const s
     for (const char* k : {"Max Total Steps", "Linear Solver Preset", "Linear Solver", "Verbosity"}) so.remove(k, false);
   }
   if (pl->isSublist("Damage")) pl->sublist("Damage").remove("Max Stall Breaks", false);
-  if (pl->isSublist("Discretization")) pl->sublist("Discretization").remove("Partition", false);
+  if (pl->isSublist("Discretization"))
+    for (const char* k : {"Partition", "Construction"}) pl->sublist("Discretization").remove(k, false);
   pl->remove("Output", false);
   std::map<std::string, std::pair<std::string, std::string>> values;
   std::function<void(const Teuchos::ParameterList&, const std::string&)> walk = [&](const Teuchos::ParameterList& l,
@@ -190,10 +191,13 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
 /// One rank file's lines ("x DOF X XPREV", "bond GID_I GID_J", "frozen DOF VALUE") into c; a DOF
 /// must be a free DOF of the scene (particle * dim + component).
 void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, const std::string& where) {
-  const long long particles = P.disc.size();
+  const long long particles = P.particleCount();
   const int D = P.dim();
   auto freeDof = [&](long long g) {
-    return g >= 0 && g < particles * D && !P.isFixed(static_cast<int>(g / D), static_cast<int>(g % D));
+    if (g < 0 || g >= particles * D) return false;
+    // A distributed problem knows its share only: another rank's DOF is checked by that rank.
+    if (P.distributed && !std::binary_search(P.globalId.begin(), P.globalId.end(), g / D)) return true;
+    return !P.isFixed(g / D, static_cast<int>(g % D));
   };
   std::ifstream in(f);
   if (!in) throw std::invalid_argument(where + ": " + f + " is missing");

@@ -35,7 +35,7 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
   const int D = ev.problem().dim();
   double s[2] = {0, 0}, g[2] = {0, 0};
   for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
-    const long long p = ev.ownedParticles()[l];
+    const int p = ev.problem().index(ev.ownedParticles()[l]);  // index in the discretisation
     if (d.fictitious[p]) continue;
     Eigen::VectorXd ur(D), u(D);
     for (int c = 0; c < D; ++c) {

@@ -178,15 +178,16 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   csv << std::setprecision(12);
   for (std::size_t i = 0; i < n; ++i) {
     const long long p = ev.ownedParticles()[i];
-    pts[i] = d.X[p];
+    const int k = ev.problem().index(p);  // its index in the discretisation (p unless distributed)
+    pts[i] = d.X[k];
     for (int c = 0; c < D; ++c) disp.values[3 * i + c] = u[i * D + c];
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values[9 * i + 3 * r + c] = outs[i].cauchy(r, c);
-    fict.values[i] = d.fictitious[p];
-    csv << p << ',' << d.X[p][0] << ',' << d.X[p][1] << ',' << d.X[p][2] << ',' << disp.values[3 * i] << ','
+    fict.values[i] = d.fictitious[k];
+    csv << p << ',' << d.X[k][0] << ',' << d.X[k][1] << ',' << d.X[k][2] << ',' << disp.values[3 * i] << ','
         << disp.values[3 * i + 1] << ',' << disp.values[3 * i + 2] << ',' << outs[i].cauchy(0, 0) << ','
         << outs[i].cauchy(1, 1) << ',' << outs[i].cauchy(2, 2) << ',' << outs[i].cauchy(0, 1) << ','
-        << static_cast<int>(d.fictitious[p]) << ',' << dmg.values[i] << '\n';
+        << static_cast<int>(d.fictitious[k]) << ',' << dmg.values[i] << '\n';
   }
   std::vector<PointField> fields{disp, stress, fict, rk};
   if (damage) fields.push_back(dmg);  // only where the effect is on

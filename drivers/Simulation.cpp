@@ -101,7 +101,21 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
   const long long counts[3] = {global, held, held <= 2 * static_cast<long long>(lp.size()) * largest ? 0 : 1};
   long long countsMax[3];
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, counts, countsMax);
+  // Particles the rank's discretisation holds: the whole body (Construction = Replicated) or its
+  // share (Distributed: owned and those within two horizons).
+  // A distributed share is the owned particles and those within two horizons of the owned box:
+  // the ghost layer (one horizon), a second layer about as wide, and the box's corners; measured
+  // at most 2.7 x the ghosts beyond the owned on every paper scene. A rank above 3 x holds more
+  // than its share (on 2 or more ranks, a replicated discretisation does).
+  long long heldParticles = ev.problem().disc.size(), heldMax = 0;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, heldParticles, Teuchos::outArg(heldMax));
+  const long long beyondShare = heldParticles > lp.numOwned + 3LL * (lp.size() - lp.numOwned) ? 1 : 0;
+  long long ranksBeyondShare = 0;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, beyondShare, Teuchos::outArg(ranksBeyondShare));
   facts.partition = {{"method", partitionName(ev.problem().partition)},
+                     {"construction", ev.problem().distributed ? "Distributed" : "Replicated"},
+                     {"particles_held_max", heldMax}, {"particles", ev.problem().particleCount()},
+                     {"ranks_beyond_particle_share", ranksBeyondShare},
                      {"owned_max", most[0]}, {"owned_min", least[0]},
                      {"ghosts_max", most[1]}, {"ghosts_min", least[1]}, {"ghosts_mean", sum[1] / comm.getSize()},
                      {"peak_rss_mib_min_rank", least[2]},
@@ -161,7 +175,7 @@ LoadStepperOptions loadSteppingOptions(const Scene& scene) {
   // damaged plate, starting from the unloaded body put stretch 0.0067 into the bonds next to the
   // loaded particles, past s_cr; the first step stagnated). Dead loads do not need it (it equals
   // Newton's first iteration there).
-  l.set("Tangent Predictor", !adr && (scene.problem->rotates() || scene.problem->prescribesDisplacement()));
+  l.set("Tangent Predictor", !adr && (scene.problem->rotates() || scene.prescribesDisplacement));
   LoadStepperOptions o = LoadStepperOptions::fromParameterList(l, scene.file);
   o.keyPrefix = "Solver/";
   return o;
@@ -425,7 +439,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   auto evaluator = buildEvaluator(scene, comm);
   RunResult res;
   res.outputDir = options.outputDir;
-  res.particles = scene.problem->disc.size();
+  res.particles = scene.problem->particleCount();
   res.dofs = evaluator->numFreeDofs();
   std::optional<Checkpoint> resume;
   if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles);

@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
   if (const std::string bad = parseRun(args, cmd); !bad.empty()) return refuse(bad);
   perinox::Scene scene;
   try {
-    scene = perinox::loadScene(cmd.scenePath, cmd.overrides, xmlDirectory() + "/solvers");
+    scene = perinox::loadScene(cmd.scenePath, cmd.overrides, xmlDirectory() + "/solvers", comm);
   } catch (const std::exception& e) {
     return refuse(std::string("error: ") + e.what());
   }

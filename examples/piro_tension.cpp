@@ -2,6 +2,7 @@
 //
 // Sample run:  mpiexec -np 2 piro_tension [--solver <prefix>/share/perinox/xml/solvers/mumps.xml] [--output out.json]
 //              mpiexec -np 2 piro_tension --loca yes     (LOCA arc-length continuation in lambda from 0 to 1)
+//              mpiexec -np 3 piro_tension --distributed yes --solver .../scalable.xml  (each rank builds its share only)
 //
 // Description: the displacement-driven tension block of xml/tension_block.xml is built in C++ as a
 // perinox::ProblemSpec, turned into perinox's Thyra model evaluator, and solved by Piro's NOX
@@ -9,6 +10,9 @@
 // continuation in the load factor p(0) from 0 to 1 along the path. out.json holds the mean displacement of the pulled
 // end and the reaction on the pulled layer in summary.json's layout: they equal
 // `perinox run xml/tension_block.xml --set "Solver/Load Steps=1"` (tests/compare_runs.py).
+// With --distributed yes the problem is built distributed (problemOnLocalLattice): each rank
+// generates and keeps only its owned particles and those within two horizons of them, selects the
+// regions on that share, and hands the evaluator the regions' global ids; the answer is the same.
 #include <LOCA_Stepper.H>
 #include <Piro_LOCASolver.hpp>
 #include <Piro_NOXSolver.hpp>
@@ -53,7 +57,8 @@ int continuation(Teuchos::ParameterList& piro, const Teuchos::RCP<PeridynamicEva
   return std::abs(lambda - 1.0) <= 1e-12 ? 0 : 3;  // 3: the path did not reach load factor 1
 }
 
-int run(const std::string& solverFile, const std::string& outputFile, bool loca, const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+int run(const std::string& solverFile, const std::string& outputFile, bool loca, bool distributed,
+        const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
   // 1. The problem: [0,1] x [0,0.5] m, 20 x 10 particles, fictitious layers outside both ends; rollers
   //    u_x = 0 on the left layer, u_y = 0 on its bottom rows, the pull u_x = 0.1 X on the right layer.
   LatticeSpec lattice;
@@ -61,12 +66,16 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
   lattice.counts = {20, 10, 1};
   lattice.horizonFactor = 1.015;
   lattice.fictitiousSides = {Side::XMin, Side::XMax};
-  auto problem = problemOnLattice(lattice, {MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1.0e9, 0.3});
+  const MaterialSpec material{MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1.0e9, 0.3};
+  auto problem = distributed ? problemOnLocalLattice(comm, lattice, material) : problemOnLattice(lattice, material);
   const Discretization& d = problem->disc;
-  const auto right = selectFictitiousSide(d, Side::XMax), end = selectSideLayer(d, Side::XMax, d.dx * (1 - 1e-9));
+  const auto rightLayer = selectFictitiousSide(d, Side::XMax);
   prescribe(*problem, selectFictitiousSide(d, Side::XMin), 0);
   prescribe(*problem, selectBox(d, Vec3(-1.0, 0.0, 0.0), Vec3(0.0, 0.03, 0.0), Population::Fictitious), 1);
-  prescribe(*problem, right, 0, [](const Vec3& X) { return 0.1 * X[0]; });
+  prescribe(*problem, rightLayer, 0, [](const Vec3& X) { return 0.1 * X[0]; });
+  // The probes' regions as the evaluator names particles (global ids; the same ids unless distributed).
+  const auto right = problem->globalIds(rightLayer);
+  const auto end = problem->globalIds(selectSideLayer(d, Side::XMax, d.dx * (1 - 1e-9)));
 
   // 2. The model evaluator (it validates the problem) with the linear solver of the preset file
   //    (checked first: one sentence for a misspelt key, before any work).
@@ -91,7 +100,7 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
   auto guess = Thyra::createMember(evaluator->get_x_space());
   Thyra::assign(guess.ptr(), 0.0);
   std::vector<std::pair<long long, double>> stretch;
-  for (long long p : evaluator->ownedParticles()) stretch.push_back({p * d.dim + 0, 0.1 * d.X[p][0]});
+  for (long long p : evaluator->ownedParticles()) stretch.push_back({p * d.dim + 0, 0.1 * d.X[problem->index(p)][0]});
   evaluator->setOwnedDofValues(*guess, stretch);
   auto in = solver.createInArgs();
   in.set_x(guess);
@@ -112,8 +121,12 @@ int run(const std::string& solverFile, const std::string& outputFile, bool loca,
 }
 
 int main(int argc, char** argv) {
-  return hostMain(argc, argv, "piro_tension", {{"solver", PERINOX_PRESETS "/mumps.xml"}, {"output", "piro_tension.json"}, {"loca", "no"}},
+  return hostMain(argc, argv, "piro_tension",
+                  {{"solver", PERINOX_PRESETS "/mumps.xml"}, {"output", "piro_tension.json"}, {"loca", "no"}, {"distributed", "no"}},
                   [](const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const HostOptions& o) {
-                    return run(o.at("solver"), o.at("output"), o.at("loca") == "yes", comm);
+                    for (const char* flag : {"loca", "distributed"})
+                      if (o.at(flag) != "yes" && o.at(flag) != "no")
+                        throw std::invalid_argument(std::string("--") + flag + " must be yes or no, not '" + o.at(flag) + "'");
+                    return run(o.at("solver"), o.at("output"), o.at("loca") == "yes", o.at("distributed") == "yes", comm);
                   });
 }

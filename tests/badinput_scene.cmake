@@ -177,3 +177,25 @@ add_test(NAME scene_character_references COMMAND ${Python3_EXECUTABLE} ${CMAKE_C
   --title "A & B U+00e9U+4e2dA" -- ${mpi_bom} $<TARGET_FILE:perinox> run ${CMAKE_CURRENT_BINARY_DIR}/character_references.xml
   --output ${PERINOX_TEST_OUT}/scene_character_references --quiet)
 set_tests_properties(scene_character_references PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT=" LABELS unit)
+
+# Built distributed (Discretization/Construction = Distributed, issue 17) on 2-3 ranks: a failure
+# that only some ranks' shares contain (the conflicting DOFs or the fictitious particles sit on one
+# or two ranks) is the same one sentence on every rank, exit code 2, nothing written, no hang; the
+# rigid-body check summed over the ranks; what only lattices support refused.
+function(perinox_bad_input_distributed name np scene message)
+  perinox_mpi_command(mpi ${np})
+  add_test(NAME badinput_${name} COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/badinput_${name}
+    --exit-code 2 --message "${message}" --no-output --
+    ${mpi} $<TARGET_FILE:perinox> run ${scene} --output ${PERINOX_TEST_OUT}/badinput_${name}
+    --set Discretization/Construction=Distributed ${ARGN})
+  set_tests_properties(badinput_${name} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS "unit;badinput;mpi"
+    PROCESSORS ${np} TIMEOUT 120)
+endfunction()
+perinox_bad_input_distributed(distributed_bc_conflict 3 ${TINY} "boundary conditions 'fix' and 'pull' ${CONFLICT} (0 and 0.0001)"
+  --set "Boundary Conditions/pull/Region=left")
+perinox_bad_input_distributed(distributed_load_on_fictitious 3 ${TINY} "load 'tip load' acts on fictitious particles"
+  --set "Loads/tip load/Region=right")
+perinox_bad_input_distributed(distributed_no_rigid_constraint 3 ${BAD}/no_constraint.xml "do not prevent rigid-body motion")
+perinox_bad_input_distributed(distributed_particle_file 2 ${XML}/peridigm_tensile.xml
+  "'Discretization/Construction' = Distributed is for lattices so far")
+perinox_bad_input_distributed(distributed_exodus_output 2 ${TINY} "gathers the whole body on rank 0" --set "Output/Format=Exodus")

@@ -10,6 +10,8 @@ Checks:
   --no-output          neither DIR nor DIR.partial may exist afterwards
   --png NAME...        these files exist in DIR and are PNG images (the plot script ran)
   --converged          summary.json says converged, every step recorded
+  --distributed        with --partition: the discretisation was built distributed and no rank held
+                       more than its owned particles and three times its ghosts
   --max-error X        summary.json's e_u is at most X
   --probe NAME[@LF] C V RTOL  probe NAME, component C, at the last step (or the step with load
                        factor nearest LF) is V within RTOL relative
@@ -65,6 +67,7 @@ def main():
     ap.add_argument("--message")
     ap.add_argument("--no-output", action="store_true")
     ap.add_argument("--converged", action="store_true")
+    ap.add_argument("--distributed", action="store_true")
     ap.add_argument("--max-error", type=float)
     ap.add_argument("--quadratic", action="store_true")
     ap.add_argument("--probe", nargs=4, action="append", default=[])
@@ -161,6 +164,14 @@ def main():
             fail(f"a rank holds {part.get('global_family_entries_max')} entries of the whole body's families")
         if part.get("ranks_beyond_family_share", -1) != 0:
             fail("a rank holds more family entries than twice its owned and ghost particles times the largest family")
+        # Construction = Distributed: every rank holds its share only (owned + at most 3 x its
+        # ghosts: a second layer and the box's corners), whatever the body's size.
+        if a.distributed:
+            if part.get("construction") != "Distributed":
+                fail(f"the discretisation was built {part.get('construction')}, expected Distributed")
+            if part.get("ranks_beyond_particle_share", -1) != 0:
+                fail(f"{part.get('ranks_beyond_particle_share')} rank(s) hold more than their owned particles and three "
+                     f"times their ghosts (particles_held_max {part.get('particles_held_max')} of {part.get('particles')})")
     if a.work_counts:
         with open(os.path.join(a.out, "summary.json")) as f:
             s = json.load(f)

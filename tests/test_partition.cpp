@@ -51,6 +51,70 @@ std::vector<LatticeSpec> lattices() {
   return specs;
 }
 
+
+/// The same loading, whatever the problem holds (the whole lattice or a rank's share): clamped
+/// fictitious layer(s), a pull u_x = 0.01 X on the plate's right layer, a body force and a modulus
+/// field that vary with position, Silling's stabilisation; all of it geometric, so a share gets
+/// the replicated problem's values for its particles.
+void load(ProblemSpec& P, const LatticeSpec& spec) {
+  const Discretization& d = P.disc;
+  const int D = spec.dim;
+  P.stabilization = true;
+  P.stab.G = 0.1;
+  const Side clamped = D == 3 ? Side::ZMin : Side::XMin;
+  for (int c = 0; c < D; ++c) prescribe(P, selectFictitiousSide(d, clamped), c);
+  if (D == 2) {
+    prescribe(P, selectFictitiousSide(d, Side::XMax), 0, [](const Vec3& X) { return 0.01 * X[0]; });
+    prescribe(P, selectFictitiousSide(d, Side::XMax), 1);
+  }
+  P.modulusScale.resize(static_cast<std::size_t>(d.size()));
+  for (int i = 0; i < d.size(); ++i) {
+    P.modulusScale[i] = 1.0 + 0.2 * std::sin(3.0 * d.X[i][0]);
+    if (!d.fictitious[i]) P.bodyForce[static_cast<std::size_t>(i) * D + (D - 1)] = -5.0 * (1.0 + d.X[i][0]);
+  }
+}
+
+struct Evaluated {
+  std::vector<long long> owned;
+  Teuchos::RCP<const TMap> freeMap;
+  std::vector<double> f;
+  Teuchos::RCP<const TCrsMatrix> J, Jn;  // full and direct-neighbour Jacobians
+};
+
+/// Residual and Jacobians at a displacement given by the DOFs' names (particle * dim + component),
+/// so the two problems see the same state whatever their numbering.
+Evaluated evaluate(const std::shared_ptr<ProblemSpec>& P) {
+  PeridynamicEvaluator ev(comm(), P);
+  auto x = Thyra::createMember(ev.get_x_space());
+  Thyra::assign(x.ptr(), 0.0);
+  auto values = ev.ownedDofValues(*x);
+  for (auto& [dof, v] : values) v = 1e-3 * std::sin(0.37 * static_cast<double>(dof));
+  ev.setOwnedDofValues(*x, values);
+  ev.setLoadFactor(0.7);
+  auto fx = Thyra::createMember(ev.get_f_space());
+  auto in = ev.createInArgs();
+  in.set_x(x);
+  auto out = ev.createOutArgs();
+  out.set_f(fx);
+  ev.evalModel(in, out);
+  const auto fd = Thyra::TpetraOperatorVectorExtraction<double, LO, GO>::getConstTpetraVector(fx)->getData();
+  return {ev.ownedParticles(), ev.ownedFreeMap(), std::vector<double>(fd.begin(), fd.end()), ev.assembledJacobian(*x),
+          ev.assembledJacobian(*x, true)};
+}
+
+void expectSameMatrix(const TCrsMatrix& a, const TCrsMatrix& b, const std::string& what) {
+  ASSERT_TRUE(a.getColMap()->isSameAs(*b.getColMap())) << what;
+  ASSERT_EQ(a.getNodeNumRows(), b.getNodeNumRows()) << what;
+  for (LO r = 0; r < static_cast<LO>(a.getNodeNumRows()); ++r) {
+    Teuchos::ArrayView<const LO> ca, cb;
+    Teuchos::ArrayView<const double> va, vb;
+    a.getLocalRowView(r, ca, va);
+    b.getLocalRowView(r, cb, vb);
+    ASSERT_EQ(std::vector<LO>(ca.begin(), ca.end()), std::vector<LO>(cb.begin(), cb.end())) << what << ", row " << r;
+    ASSERT_EQ(std::vector<double>(va.begin(), va.end()), std::vector<double>(vb.begin(), vb.end())) << what << ", row " << r;
+  }
+}
+
 }  // namespace
 
 TEST(Partition, EveryParticleIsOwnedOnceAndSortedOnEveryMethod) {
@@ -179,34 +243,10 @@ TEST(LocalFamilies, EvaluatorWithoutGlobalFamiliesGivesTheSameAnswers) {
   auto bare = std::make_shared<ProblemSpec>(*withF);
   bare->disc.familyOffset.clear();
   bare->disc.familyIndex.clear();
-  std::vector<Teuchos::RCP<const TCrsMatrix>> J;
-  std::vector<std::vector<double>> f;
-  for (const auto& P : {withF, bare}) {
-    PeridynamicEvaluator ev(comm(), P);
-    auto x = Thyra::createMember(ev.get_x_space());
-    auto xt = Thyra::TpetraOperatorVectorExtraction<double, LO, GO>::getTpetraVector(x);
-    auto xd = xt->getDataNonConst();
-    for (LO i = 0; i < static_cast<LO>(xd.size()); ++i) xd[i] = 1e-3 * std::sin(0.37 * static_cast<double>(xt->getMap()->getGlobalElement(i)));
-    xd = Teuchos::null;
-    auto fx = Thyra::createMember(ev.get_f_space());
-    auto in = ev.createInArgs();
-    in.set_x(x);
-    auto out = ev.createOutArgs();
-    out.set_f(fx);
-    ev.evalModel(in, out);
-    const auto fd = Thyra::TpetraOperatorVectorExtraction<double, LO, GO>::getConstTpetraVector(fx)->getData();
-    f.emplace_back(fd.begin(), fd.end());
-    J.push_back(ev.assembledJacobian(*x));
-  }
-  ASSERT_EQ(f[0], f[1]);
-  ASSERT_EQ(J[0]->getGlobalNumEntries(), J[1]->getGlobalNumEntries());
-  for (LO r = 0; r < static_cast<LO>(J[0]->getNodeNumRows()); ++r) {
-    Teuchos::ArrayView<const LO> c0, c1;
-    Teuchos::ArrayView<const double> v0, v1;
-    J[0]->getLocalRowView(r, c0, v0);
-    J[1]->getLocalRowView(r, c1, v1);
-    ASSERT_EQ(std::vector<double>(v0.begin(), v0.end()), std::vector<double>(v1.begin(), v1.end())) << "row " << r;
-  }
+  const Evaluated a = evaluate(withF), b = evaluate(bare);
+  ASSERT_EQ(a.f, b.f);
+  expectSameMatrix(*a.J, *b.J, "full Jacobian");
+  expectSameMatrix(*a.Jn, *b.Jn, "neighbour Jacobian");
 }
 
 // The Jacobian's graph is built in local indices (Assembler::buildOwnedGraph) with the column
@@ -246,5 +286,84 @@ TEST(JacobianGraph, LocalConstructionEqualsFillingByGlobalIndex) {
       ref->getLocalRowView(r, b);
       ASSERT_EQ(std::vector<LO>(a.begin(), a.end()), std::vector<LO>(b.begin(), b.end())) << "row " << r;
     }
+  }
+}
+
+// --- The distributed problem (problemOnLocalLattice): each rank builds only its share ---------
+
+
+// On every lattice (2D with a hole, jitter and two fictitious layers; 3D; 1D) and partition, the
+// evaluator on a rank's share owns the same particles, has the same free-DOF map, and gives the
+// same residual and Jacobians, bit for bit, as on the replicated problem: the share holds every
+// particle the evaluator reads (the families, the ghosts' families two horizons out, the loads).
+TEST(DistributedProblem, GivesTheReplicatedResidualAndJacobians) {
+  for (const LatticeSpec& spec : lattices())
+    for (PartitionMethod m : {PartitionMethod::Rcb, PartitionMethod::Slabs}) {
+      const MaterialSpec mat{MaterialKind::Hencky, spec.dim, PlanarMode::PlaneStrain, 1000.0, 0.3};
+      auto whole = problemOnLattice(spec, mat);
+      whole->partition = m;
+      whole->disc.familyOffset.clear();  // as a scene builds it
+      whole->disc.familyIndex.clear();
+      load(*whole, spec);
+      auto share = problemOnLocalLattice(comm(), spec, mat, m);
+      load(*share, spec);
+      const std::string what = std::to_string(spec.dim) + "D, " + partitionName(m);
+      ASSERT_TRUE(share->distributed);
+      EXPECT_EQ(share->globalCount, whole->disc.size()) << what;
+      const Evaluated a = evaluate(whole), b = evaluate(share);
+      ASSERT_EQ(a.owned, b.owned) << what;
+      ASSERT_TRUE(a.freeMap->isSameAs(*b.freeMap)) << what;
+      ASSERT_EQ(a.f, b.f) << what;
+      expectSameMatrix(*a.J, *b.J, what + ", full Jacobian");
+      expectSameMatrix(*a.Jn, *b.Jn, what + ", neighbour Jacobian");
+    }
+}
+
+// What a rank holds: its owned particles and those within two horizons of its owned box, not
+// the lattice. Counted against the evaluator's owned + ghost particles (one horizon): the share
+// adds a second layer about as wide, and the corners of the box. A construction that built or
+// gathered the whole lattice on a rank fails the first bound on 2 or more ranks.
+TEST(DistributedProblem, NoRankHoldsTheWholeBody) {
+  LatticeSpec spec = lattices()[0];
+  spec.counts = {120, 40, 1};
+  spec.holes.clear();
+  const MaterialSpec mat{MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1000.0, 0.3};
+  auto share = problemOnLocalLattice(comm(), spec, mat);
+  load(*share, spec);
+  PeridynamicEvaluator ev(comm(), share);
+  const long long held = share->disc.size(), owned = static_cast<long long>(ev.ownedParticles().size());
+  const long long local = ev.localParticleCount(), ghosts = local - owned;
+  const long long layers = static_cast<long long>(std::ceil(2.0 * spec.horizonFactor));  // rows within two horizons
+  EXPECT_EQ(static_cast<long long>(share->fixedMask.size()), held);
+  EXPECT_EQ(static_cast<long long>(share->prescribed.size()), 2 * held);
+  if (comm()->getSize() > 1) {
+    EXPECT_LT(held, share->globalCount * 3 / 4) << held << " of " << share->globalCount;
+    EXPECT_LE(held - owned, 2 * ghosts + 4 * layers * layers) << "owned " << owned << ", ghosts " << ghosts;
+  } else {
+    EXPECT_EQ(held, share->globalCount);
+  }
+}
+
+// A share that cannot be used is refused on every rank with one sentence (the lowest refusing
+// rank's), never left to hang a collective: here rank 0's share only.
+TEST(DistributedProblem, ABadShareIsRefusedOnEveryRank) {
+  const LatticeSpec spec = lattices()[0];
+  const MaterialSpec mat{MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1000.0, 0.3};
+  auto share = problemOnLocalLattice(comm(), spec, mat);
+  load(*share, spec);
+  if (comm()->getRank() == 0) share->bodyForce[0] = std::nan("");
+  try {
+    PeridynamicEvaluator ev(comm(), share);
+    FAIL() << "accepted a NaN body force";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bodyForce[0]"), std::string::npos) << e.what();
+  }
+  // Nothing prescribed anywhere: the rigid-body check over all ranks refuses it.
+  auto free = problemOnLocalLattice(comm(), spec, mat);
+  try {
+    PeridynamicEvaluator ev(comm(), free);
+    FAIL() << "accepted a body free to move";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rigid-body motion"), std::string::npos) << e.what();
   }
 }

@@ -41,7 +41,7 @@ DofMaps::DofMaps(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Probl
       overlapAllG.push_back(lp.globalId[l] * D + c);
       if (l < lp.numOwned) ownedAllG.push_back(lp.globalId[l] * D + c);
     }
-  ownedAll = Teuchos::rcp(new TMap(static_cast<Tpetra::global_size_t>(P.disc.size()) * D,
+  ownedAll = Teuchos::rcp(new TMap(static_cast<Tpetra::global_size_t>(P.particleCount()) * D,
                                    Teuchos::ArrayView<const GO>(ownedAllG), 0, comm));
   overlapAll = Teuchos::rcp(new TMap(invalid, Teuchos::ArrayView<const GO>(overlapAllG), 0, comm));
   allImport = Teuchos::rcp(new Tpetra::Import<LO, GO>(ownedAll, overlapAll));
@@ -94,8 +94,16 @@ Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> DofMaps::rigidBodyModes(const 
   const int nModes = D == 1 ? 1 : (D == 2 ? 3 : 6);
   auto B = Teuchos::rcp(new Tpetra::MultiVector<double, LO, GO>(ownedFree, nModes));
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& X : problem.disc.X) c += X;
-  c /= static_cast<double>(problem.disc.size());
+  if (!problem.distributed) {
+    for (const auto& X : problem.disc.X) c += X;
+    c /= static_cast<double>(problem.disc.size());
+  } else {  // the owned particles' sum over the ranks
+    double mine[3] = {0, 0, 0}, all[3];
+    for (int l = 0; l < lp.numOwned; ++l)
+      for (int a = 0; a < 3; ++a) mine[a] += lp.X[l][a];
+    Teuchos::reduceAll(*ownedAll->getComm(), Teuchos::REDUCE_SUM, 3, mine, all);
+    c = Eigen::Vector3d(all[0], all[1], all[2]) / static_cast<double>(problem.particleCount());
+  }
   const double L = problem.disc.horizon;
   for (int m = 0; m < nModes; ++m) {
     auto col = B->getDataNonConst(m);
@@ -342,7 +350,7 @@ Teuchos::RCP<TCrsGraph> Assembler::buildOwnedGraph(bool neighbours) const {
     std::sort(S.begin(), S.end());
     S.erase(std::unique(S.begin(), S.end()), S.end());
     for (long long s : S)
-      if (near(d.X[p], d.X[s])) partNbr.push_back(s);
+      if (!neighbours || near(d.X[problem_.index(p)], d.X[problem_.index(s)])) partNbr.push_back(s);
     partPtr.push_back(partNbr.size());
   }
   // Their free ids, from their owners (the particles two horizons away need not be local).

@@ -11,7 +11,13 @@ DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm
     : comm_(std::move(comm)), problem_(problem), model_(model), dofs_(dofs), families_(families) {
   // Stiffness of frozen (detached) DOFs: E V / dx^2 of a particle, so the frozen rows are neither
   // negligible nor dominant in the linear solves.
-  frozen_.stiffness = problem.stiffestModulus() * problem.disc.volume.front() / (problem.disc.dx * problem.disc.dx);
+  // The volume of particle 0 (distributed: from the rank whose share holds it).
+  double v0 = problem.disc.volume.front();
+  if (problem.distributed) {
+    const double mine = problem.globalId.front() == 0 ? v0 : -1.0;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(v0));
+  }
+  frozen_.stiffness = problem.stiffestModulus() * v0 / (problem.disc.dx * problem.disc.dx);
 }
 
 BreakReport DamageBookkeeping::breakBonds(const std::vector<double>& u, const double* xFree) {
@@ -134,7 +140,7 @@ std::vector<long long> DamageBookkeeping::unanchoredParticles() const {
   // over the owned families to a fixed point on each rank, then to the ghosts by an Import, until
   // no rank anchors another particle.
   std::vector<char> anchored(lp.size(), 0);
-  for (int l = 0; l < lp.numOwned; ++l) anchored[l] = problem_.fixedMask[lp.globalId[l]] != 0;
+  for (int l = 0; l < lp.numOwned; ++l) anchored[l] = problem_.fixedMask[problem_.index(lp.globalId[l])] != 0;
   TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
   long long before = -1;
   for (;;) {

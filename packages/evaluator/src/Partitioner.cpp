@@ -1,6 +1,7 @@
 // Zoltan2 behind perinox's partition choice, and the distributed lattice construction (the only
 // translation unit with Zoltan2's headers).
 #include "perinox/evaluator/Partitioner.hpp"
+#include "perinox/evaluator/Problem.hpp"
 
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultMpiComm.hpp>
@@ -212,12 +213,12 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Latti
   return receiveSorted(*comm, slab, recs, part);
 }
 
-/// 3: owned + the particles other ranks own within one cell-list width of this rank's owned
+/// 3: owned + the particles other ranks own within `horizons` horizons of this rank's owned
 /// bounding box (every rank's box is a small table of 2 x 3 numbers per rank), in id order.
-Share withNeighbours(const Teuchos::Comm<int>& comm, const Share& owned) {
+Share withNeighbours(const Teuchos::Comm<int>& comm, const Share& owned, double horizons) {
   const int ranks = comm.getSize(), rank = comm.getRank();
   const Discretization& d = owned.d;
-  const double reach = d.horizon * (1.0 + 1e-9);
+  const double reach = horizons * d.horizon * (1.0 + 1e-9);
   std::vector<double> box(6, 0.0), boxes(static_cast<std::size_t>(6 * ranks));
   for (int a = 0; a < 3; ++a) box[a] = box[3 + a] = d.X[0][a];
   for (const Vec3& x : d.X)
@@ -250,7 +251,7 @@ LocalLattice buildLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& com
   // 4. Families: the cell-list search over owned + neighbours in id order (the whole lattice's
   //    distance test and family order), kept for the owned particles; the neighbours in an owned
   //    family are the ghosts.
-  Share near = withNeighbours(*comm, owned);
+  Share near = withNeighbours(*comm, owned, 1.0);
   buildFamilies(near.d);
   const Discretization& nd = near.d;
   std::vector<int> ownedNear;  // index in near of each owned particle
@@ -286,6 +287,28 @@ LocalLattice buildLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& com
   out.heldParticles = nd.X.size();
   out.heldBonds = static_cast<std::size_t>(nd.familyOffset.back());
   return out;
+}
+
+std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                   const LatticeSpec& lattice, const MaterialSpec& material,
+                                                   PartitionMethod partition) {
+  auto P = std::make_shared<ProblemSpec>();
+  P->distributed = true;
+  P->partition = partition;
+  P->material = material;
+  const Share owned = ownedShare(comm, lattice, partition, P->globalCount);
+  requireEveryRankOwns(*comm, owned.ids.size(), P->globalCount, partition);
+  P->owned = owned.ids;
+  // Two horizons: the ghosts' families (the Jacobian graph's rows two horizons out) and the
+  // cells of the lattice operator's owned nodes lie within them.
+  Share near = withNeighbours(*comm, owned, 2.0);
+  P->disc = std::move(near.d);
+  P->globalId = std::move(near.ids);
+  const std::size_t n = P->disc.X.size(), D = static_cast<std::size_t>(P->disc.dim);
+  P->fixedMask.assign(n, 0);
+  P->prescribed.assign(n * D, 0.0);
+  P->bodyForce.assign(n * D, 0.0);
+  return P;
 }
 
 }  // namespace perinox

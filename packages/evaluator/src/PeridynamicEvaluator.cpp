@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "perinox/evaluator/JacobianOperators.hpp"
+#include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/Partitioner.hpp"
 
 namespace perinox {
@@ -25,21 +26,59 @@ using Node = TMap::node_type;
 using TOE = Thyra::TpetraOperatorVectorExtraction<double, LO, GO, Node>;
 using MEB = Thyra::ModelEvaluatorBase;
 
+namespace {
+
+/// validateProblem on every rank, and the same exception on every rank when any refuses. A
+/// replicated problem is the same everywhere; a distributed one is checked share by share (the
+/// lowest refusing rank's sentence is the one thrown), then for rigid-body motion over the ranks.
+void validateTogether(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
+  std::string err;
+  try {
+    validateProblem(P);
+  } catch (const std::exception& e) {
+    err = e.what();
+  }
+  if (!P.distributed) {
+    if (!err.empty()) throw std::invalid_argument(err);
+    return;
+  }
+  if (err = lowestRankMessage(comm, err); !err.empty()) throw std::invalid_argument(err);
+  const Eigen::MatrixXd mineGram = rigidModeGram(P);
+  Eigen::MatrixXd gram(mineGram.rows(), mineGram.cols());
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, static_cast<int>(mineGram.size()), mineGram.data(), gram.data());
+  if (!gramHasFullRank(gram))
+    throw std::invalid_argument(
+        "ProblemSpec: the prescribed DOFs (fixedMask) do not prevent rigid-body motion: a translation or rotation of "
+        "the whole body is free; prescribe more components");
+}
+
+}  // namespace
+
 PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
                                            std::shared_ptr<const ProblemSpec> problem)
     : comm_(comm), problem_(std::move(problem)) {
   if (!problem_) throw std::invalid_argument("ProblemSpec: the evaluator was given no problem");
-  validateProblem(*problem_);
+  validateTogether(*comm_, *problem_);
   const ProblemSpec& P = *problem_;
-  owned_ = perinox::ownedParticles(comm_, P.disc, P.partition);
-  LocalParticles lp = localParticles(P.disc, owned_, &families_);
+  LocalParticles lp;
+  if (!P.distributed) {
+    owned_ = perinox::ownedParticles(comm_, P.disc, P.partition);
+    lp = localParticles(P.disc, owned_, &families_);
+  } else {  // the share's indices are ascending in global id: the same order, renamed
+    owned_ = P.owned;
+    std::vector<long long> ownedIndex;
+    for (long long g : owned_) ownedIndex.push_back(P.index(g));
+    lp = localParticles(P.disc, ownedIndex, &families_);
+    for (long long& g : lp.globalId) g = P.globalId[g];
+    for (long long& g : families_.ghostMembers) g = P.globalId[g];
+  }
   if (!P.modulusScale.empty())
-    for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[g]);
+    for (long long g : lp.globalId) lp.modulusScale.push_back(P.modulusScale[P.index(g)]);
   if (P.blocks.empty()) {
     model_ = std::make_unique<Model>(P.material, std::move(lp));
   } else {  // blocks: each local particle's index into the table of the blocks' materials
     const std::vector<int> index = P.blockIndex();
-    for (long long g : lp.globalId) lp.material.push_back(index[g]);
+    for (long long g : lp.globalId) lp.material.push_back(index[P.index(g)]);
     model_ = std::make_unique<Model>(P.materials(), std::move(lp));
   }
   if (P.stressPoints) model_->enableStressPoints(P.stressPointSeed);
@@ -64,6 +103,11 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_, families_);
   buildExternalForce();
   computeRoundoffScale();
+  {  // every rank takes the same branch in loadDerivative (a distributed share may prescribe none)
+    int mine = P.prescribesDisplacement() ? 1 : 0, any = 0;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(any));
+    prescribesDisplacement_ = any != 0;
+  }
   xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(dofs_.ownedFree);
   // The load factor: one value, replicated on every rank.
   pSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(Tpetra::createLocalMapWithNode<LO, GO, Node>(1, comm_));
@@ -85,8 +129,8 @@ void PeridynamicEvaluator::buildExternalForce() {
     for (int l = 0; l < lp.numOwned; ++l)
       for (int c = 0; c < D; ++c)
         if (dofs_.overlapFreeLid[l * D + c] >= 0) {
-          const long long g = lp.globalId[l];
-          f[k++] = P.disc.volume[g] * P.bodyForce[g * D + c];
+          const int i = P.index(lp.globalId[l]);
+          f[k++] = P.disc.volume[i] * P.bodyForce[static_cast<std::size_t>(i) * D + c];
         }
   }
   fextNorm_ = fextOwnedFree_->norm2();
@@ -153,7 +197,7 @@ void PeridynamicEvaluator::loadDerivative(const Thyra::VectorBase<double>& x, Th
     evalModel(in, out);
   };
   double h = 0.5;  // dead loads: f is linear in lambda, f(1) - f(0) exactly
-  if (problem_->prescribesDisplacement()) {
+  if (prescribesDisplacement_) {
     h = 1e-6 * std::max(1.0, std::abs(lambda));
     residualAt(lambda + h, fl);
     residualAt(lambda - h, *fm);
@@ -163,7 +207,7 @@ void PeridynamicEvaluator::loadDerivative(const Thyra::VectorBase<double>& x, Th
   }
   lambda_ = lambda;
   Thyra::Vp_StV(Teuchos::ptrFromRef(fl), -1.0, *fm);
-  if (problem_->prescribesDisplacement()) Thyra::scale(0.5 / h, Teuchos::ptrFromRef(fl));
+  if (prescribesDisplacement_) Thyra::scale(0.5 / h, Teuchos::ptrFromRef(fl));
 }
 
 MEB::OutArgs<double> PeridynamicEvaluator::createOutArgsImpl() const {
@@ -292,13 +336,14 @@ std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::Vector
           }
           ud[l * D + c] = v;
         } else if (!rotation) {
-          ud[l * D + c] = lambda_ * P.prescribed[g * D + c];
+          ud[l * D + c] = lambda_ * P.prescribed[static_cast<std::size_t>(P.index(g)) * D + c];
         } else {
           // Superposed rotation: every component of a prescribed particle is prescribed (the
           // scene checks), so the particle goes to R (X + lambda u_bar - c) + c.
           Vec3 ub = Vec3::Zero();
-          for (int a = 0; a < D; ++a) ub[a] = P.prescribed[g * D + a];
-          const Vec3 X = P.disc.X[g];
+          const int i = P.index(g);
+          for (int a = 0; a < D; ++a) ub[a] = P.prescribed[static_cast<std::size_t>(i) * D + a];
+          const Vec3 X = P.disc.X[i];
           const Vec3 y = (*rotation) * (X + lambda_ * ub - P.rotation.center) + P.rotation.center;
           ud[l * D + c] = y[c] - X[c];
         }

@@ -2,6 +2,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <map>
 #include <set>
@@ -68,8 +69,26 @@ void validateBlocks(const ProblemSpec& P) {
     refuse("stab.C is set, but with blocks each block's C applies (BlockSpec::C); leave stab.C at its default");
   std::vector<long long> count(P.blocks.size(), 0);
   for (int k : P.blockIndex()) ++count[k];  // throws for a particle whose block has no entry
-  for (std::size_t k = 0; k < P.blocks.size(); ++k)
+  for (std::size_t k = 0; k < P.blocks.size() && !P.distributed; ++k)  // a share may miss a block
     if (count[k] == 0) refuse("blocks[" + std::to_string(k) + "] names block " + std::to_string(P.blocks[k].id) + ", which has no particle");
+}
+
+/// A distributed problem's share: one global id per particle, ascending, the owned ones among
+/// them, a global count that holds them all.
+void validateShare(const ProblemSpec& P) {
+  const std::size_t n = P.disc.X.size();
+  if (P.globalId.size() != n)
+    refuse("globalId has " + std::to_string(P.globalId.size()) + " entries, not one per particle of the share (" + std::to_string(n) + ")");
+  for (std::size_t i = 0; i < n; ++i)
+    if (P.globalId[i] < 0 || P.globalId[i] >= P.globalCount || (i > 0 && P.globalId[i] <= P.globalId[i - 1]))
+      refuse("globalId must be ascending ids in [0, globalCount = " + std::to_string(P.globalCount) + "); entry " +
+             std::to_string(i) + " is " + std::to_string(P.globalId[i]));
+  if (P.owned.empty()) refuse("owned is empty: every rank must own particles");
+  for (std::size_t k = 0; k < P.owned.size(); ++k) {
+    if (k > 0 && P.owned[k] <= P.owned[k - 1]) refuse("owned must be sorted global ids without repeats");
+    if (!std::binary_search(P.globalId.begin(), P.globalId.end(), P.owned[k]))
+      refuse("owned particle " + std::to_string(P.owned[k]) + " is not in the share (globalId)");
+  }
 }
 
 }  // namespace
@@ -140,15 +159,15 @@ void prescribe(ProblemSpec& P, const std::vector<int>& particles, int c, double 
   prescribe(P, particles, c, [value](const Vec3&) { return value; });
 }
 
-bool preventsRigidMotion(const ProblemSpec& P) {
+Eigen::MatrixXd rigidModeGram(const ProblemSpec& P) {
   const Discretization& d = P.disc;
   const int dim = d.dim;
   const int nm = dim == 1 ? 1 : (dim == 2 ? 3 : 6);
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nm, nm);
   const Vec3 c = 0.5 * (d.boxLower + d.boxUpper);
-  for (int p = 0; p < d.size(); ++p)
+  auto add = [&](int p) {
     for (int a = 0; a < dim; ++a) {
-      if (!P.isFixed(p, a)) continue;
+      if (!((P.fixedMask[p] >> a) & 1u)) continue;
       Eigen::VectorXd row = Eigen::VectorXd::Zero(nm);
       row[a] = 1;  // translation a
       const Vec3 x = (d.X[p] - c) / std::max(d.dx, 1e-300);
@@ -161,8 +180,42 @@ bool preventsRigidMotion(const ProblemSpec& P) {
       }
       M += row * row.transpose();
     }
+  };
+  if (P.distributed) {
+    for (long long g : P.owned) add(P.index(g));
+  } else {
+    for (int p = 0; p < d.size(); ++p) add(p);
+  }
+  return M;
+}
+
+bool gramHasFullRank(const Eigen::MatrixXd& M) {
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
   return es.eigenvalues().minCoeff() > 1e-9 * std::max(1.0, es.eigenvalues().maxCoeff());
+}
+
+bool preventsRigidMotion(const ProblemSpec& P) { return gramHasFullRank(rigidModeGram(P)); }
+
+std::vector<int> ProblemSpec::globalIds(const std::vector<int>& indices) const {
+  if (!distributed) return indices;
+  std::vector<int> out;
+  out.reserve(indices.size());
+  for (int i : indices) {
+    if (i < 0 || i >= static_cast<int>(globalId.size()))
+      throw std::out_of_range("ProblemSpec: particle index " + std::to_string(i) + " is not in this rank's share");
+    if (globalId[i] > std::numeric_limits<int>::max())
+      throw std::out_of_range("ProblemSpec: global id " + std::to_string(globalId[i]) + " does not fit an int");
+    out.push_back(static_cast<int>(globalId[i]));
+  }
+  return out;
+}
+
+int ProblemSpec::index(long long g) const {
+  if (!distributed) return static_cast<int>(g);
+  const auto it = std::lower_bound(globalId.begin(), globalId.end(), g);
+  if (it == globalId.end() || *it != g)
+    throw std::out_of_range("ProblemSpec: particle " + std::to_string(g) + " is not in this rank's share");
+  return static_cast<int>(it - globalId.begin());
 }
 
 void validateProblem(const ProblemSpec& P) {
@@ -216,7 +269,8 @@ void validateProblem(const ProblemSpec& P) {
   if (!std::isfinite(P.rotation.angle) || !P.rotation.center.allFinite() || !P.rotation.axis.allFinite())
     refuse("rotation has a non-finite angle, centre or axis");
   if (P.rotates() && std::abs(P.rotation.axis.norm() - 1.0) > 1e-9) refuse("rotation.axis must be a unit vector");
-  if (!preventsRigidMotion(P))
+  if (P.distributed) validateShare(P);
+  else if (!preventsRigidMotion(P))
     refuse("the prescribed DOFs (fixedMask) do not prevent rigid-body motion: a translation or rotation of the whole "
            "body is free; prescribe more components");
 }

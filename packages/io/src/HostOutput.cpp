@@ -47,7 +47,7 @@ void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev,
   PointField displacement{"displacement", 3, {}}, stress{"cauchy_stress", 9, {}};
   for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
     const long long p = ev.ownedParticles()[l];
-    points.push_back(d.X[p]);
+    points.push_back(d.X[ev.problem().index(p)]);
     for (int c = 0; c < 3; ++c) displacement.values.push_back(c < D ? u[l * D + c] : 0.0);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values.push_back(outs[l].cauchy(r, c));

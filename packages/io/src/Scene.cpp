@@ -3,6 +3,8 @@
 #include "perinox/io/Scene.hpp"
 
 #include <Teuchos_Array.hpp>
+#include <Teuchos_CommHelpers.hpp>
+#include <Teuchos_DefaultComm.hpp>
 #include <Teuchos_StandardParameterEntryValidators.hpp>
 #include <Teuchos_StrUtils.hpp>
 #include <Teuchos_StringInputSource.hpp>
@@ -25,6 +27,8 @@
 
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
+#include "perinox/evaluator/LowestRankMessage.hpp"
+#include "perinox/evaluator/Problem.hpp"
 #include "perinox/model/Partition.hpp"
 
 namespace perinox {
@@ -67,11 +71,13 @@ std::string number(double v) {
 }
 
 /// One line, at most kMaxMessage characters: a message never grows with the user's input.
-[[noreturn]] void fail(const std::string& file, std::string msg) {
+std::string failMessage(const std::string& file, std::string msg) {
   std::replace_if(msg.begin(), msg.end(), [](char c) { return c == '\n' || c == '\r' || c == '\t'; }, ' ');
   if (msg.size() > kMaxMessage) msg = msg.substr(0, kMaxMessage - 3) + "...";
-  throw SceneError(file + ": " + msg);
+  return file + ": " + msg;
 }
+
+[[noreturn]] void fail(const std::string& file, std::string msg) { throw SceneError(failMessage(file, std::move(msg))); }
 
 // ---------------------------------------------------------------------------------------------
 // Schema: every key with its default, its meaning and, where the value is restricted, a Teuchos
@@ -373,6 +379,11 @@ void discretizationSchema(ParameterList& d) {
                               {partitionName(PartitionMethod::MultiJagged), PartitionMethod::MultiJagged, "Zoltan2 multi-jagged"},
                               {partitionName(PartitionMethod::Slabs), PartitionMethod::Slabs, "contiguous particle-id ranges, lattice rows; for tests"}},
                              "how particles are split among MPI ranks: ");
+  setChoice(d, "Construction", "Replicated",
+            {{"Replicated", "every rank builds the whole discretisation (its positions, loads and regions) and keeps its particles' families"},
+             {"Distributed", "Lattice only: each rank generates and keeps only its owned particles and those within two horizons of them; "
+                             "regions, boundary conditions and loads are found rank by rank (docs/architecture.md, \"Distribution\")"}},
+            "how the discretisation is built on MPI ranks: ");
 }
 
 void materialSchema(ParameterList& m) {
@@ -979,6 +990,28 @@ struct SceneBuild {
   const std::string& presetDir;
   int dim;
   ExodusMesh mesh;  // Type = Exodus: the mesh's blocks and sets, for the regions
+  Teuchos::RCP<const Teuchos::Comm<int>> comm;  // the ranks building the scene together
+  std::string localError;  // distributed: the first failure seen in this rank's share (localFail)
+
+  bool distributed() const { return problem.distributed; }
+  /// A failure found in this rank's data. Replicated: every rank finds it; fail now. Distributed:
+  /// other ranks may not, so record it and go on to the step's end, where the ranks agree
+  /// (agreeOnStep) and all fail with the lowest failing rank's sentence.
+  void localFail(const std::string& msg) {
+    if (!distributed()) fail(file, msg);
+    if (localError.empty()) localError = msg;
+  }
+  /// Sum over the ranks (distributed), else v.
+  long long sumOverRanks(long long v) const {
+    if (!distributed()) return v;
+    long long all = 0;
+    Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, v, Teuchos::outArg(all));
+    return all;
+  }
+  /// Global id of disc's particle i.
+  long long gid(int i) const { return distributed() ? problem.globalId[i] : i; }
+  /// Whether a particle (a global id) is owned by this rank; every particle when replicated.
+  bool owns(long long g) const { return !distributed() || std::binary_search(problem.owned.begin(), problem.owned.end(), g); }
 
   Section section(const std::string& name) const { return {pl.sublist(name), schema.sublist(name), name, file}; }
   const std::vector<int>& region(const std::string& key, const std::string& name) const {
@@ -1021,7 +1054,8 @@ std::vector<int> meshSetRegion(const SceneBuild& b, const Section& r, const std:
     std::vector<int> ids;
     for (int i = 0; i < d.size(); ++i)
       if (d.block[i] == blockId && !d.fictitious[i]) ids.push_back(i);
-    if (ids.empty()) fail(file, "region '" + region + "': no particle is in block " + std::to_string(blockId));
+    if (b.sumOverRanks(static_cast<long long>(ids.size())) == 0)
+      fail(file, "region '" + region + "': no particle is in block " + std::to_string(blockId));
     return ids;
   }
   if (!exodus) fail(file, "region '" + region + "' is a " + type + ", which needs 'Discretization/Type' = Exodus");
@@ -1156,7 +1190,7 @@ void latticeCounts(const Section& dl, LatticeSpec& ls) {
   }
 }
 
-Discretization readLattice(const Section& dl, int dim, double thickness) {
+LatticeSpec readLatticeSpec(const Section& dl, int dim, double thickness) {
   const std::string& file = dl.file;
   LatticeSpec ls;
   ls.dim = dim;
@@ -1180,7 +1214,7 @@ Discretization readLattice(const Section& dl, int dim, double thickness) {
   ls.jitter = dl.ranged<double>("Jitter");
   ls.jitterSeed = static_cast<unsigned>(dl.ranged<int>("Jitter Seed"));
   ls.holes = readHoles(dl, dim);
-  return buildLattice(ls, false);  // families: each rank finds its own (localParticles)
+  return ls;
 }
 
 /// The horizon of a particle file or mesh: Horizon, or Horizon Factor x the spacing, within [1, 50] spacings.
@@ -1231,9 +1265,24 @@ void readDiscretization(SceneBuild& b) {
   const double thickness = dl.ranged<double>("Thickness");
   if (dtype != "Exodus" && !dl.get<std::string>("Mesh File").empty())
     fail(b.file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
+  const bool distributed = dl.get<std::string>("Construction") == "Distributed";
+  if (distributed && dtype != "Lattice")
+    fail(b.file, "'Discretization/Construction' = Distributed is for lattices so far; a " + dtype +
+                     " is read whole on every rank (use Construction = Replicated)");
+  b.problem.partition = dl.choice<PartitionMethod>("Partition");
   try {
-    if (dtype == "Lattice")
-      b.problem.disc = readLattice(dl, b.dim, thickness);
+    if (dtype == "Lattice" && distributed) {
+      // This rank's share only (problemOnLocalLattice): its owned particles and those within two
+      // horizons of them, with their global ids.
+      auto share = problemOnLocalLattice(b.comm, readLatticeSpec(dl, b.dim, thickness), b.problem.material, b.problem.partition);
+      ProblemSpec& P = b.problem;
+      P.distributed = true;
+      P.disc = std::move(share->disc);
+      P.globalId = std::move(share->globalId);
+      P.owned = std::move(share->owned);
+      P.globalCount = share->globalCount;
+    } else if (dtype == "Lattice")
+      b.problem.disc = buildLattice(readLatticeSpec(dl, b.dim, thickness), false);  // families: each rank finds its own
     else if (dtype == "Particle File")
       b.problem.disc = readParticles(b, dl, thickness);
     else
@@ -1245,7 +1294,6 @@ void readDiscretization(SceneBuild& b) {
   } catch (const std::runtime_error& e) {
     fail(b.file, std::string("Discretization: ") + e.what());
   }
-  b.problem.partition = dl.choice<PartitionMethod>("Partition");
 }
 
 /// Model/Stabilization and G. The micromodulus is the library's (ProblemSpec::stabilizationSpec).
@@ -1282,7 +1330,9 @@ void readControls(SceneBuild& b) {
   if (ctrl == "Springs" || ctrl == "Average Displacement") {
     if (cc < 0) {
       // Seed 001 Table 1 (optimum C1, C2 for the 1D bar) by particle count.
-      const int nreal = static_cast<int>(std::count(d.fictitious.begin(), d.fictitious.end(), 0));
+      long long mine = 0;  // real particles (owned ones, summed over the ranks when distributed)
+      for (int i = 0; i < d.size(); ++i) mine += d.fictitious[i] == 0 && b.owns(b.gid(i));
+      const long long nreal = b.sumOverRanks(mine);
       const std::map<int, std::pair<double, double>> table{{100, {0.8, 60}}, {200, {1.28, 150}}, {500, {2, 500}}, {1000, {3, 1750}}};
       auto it = table.find(nreal);
       if (it == table.end())
@@ -1349,7 +1399,7 @@ void readBlocks(SceneBuild& b) {
       if (type != "Lattice") fail(file, key + "Box Min' is for lattices; a particle file's or mesh's blocks come from the file");
       for (int p : selectBox(d, vec3(lo), vec3(hi), Population::All)) {
         if (!boxOf[p].empty())
-          fail(file, "the particle at " + position(d, p) + " is in the boxes of blocks '" + boxOf[p] + "' and '" + name + "'; block boxes must not overlap");
+          b.localFail("the particle at " + position(d, p) + " is in the boxes of blocks '" + boxOf[p] + "' and '" + name + "'; block boxes must not overlap");
         boxOf[p] = name;
         d.block[p] = id;
       }
@@ -1389,10 +1439,13 @@ void readBlocks(SceneBuild& b) {
   std::map<int, long long> count;
   for (int p = 0; p < d.size(); ++p) ++count[d.block[p]];
   for (const auto& [id, n] : count)
-    if (!entryOf.count(id))
-      fail(file, "block " + std::to_string(id) + " (" + std::to_string(n) + " particles) has no entry under 'Blocks'; give every block its material");
-  for (const auto& [id, name] : entryOf)
-    if (!count.count(id)) fail(file, "block '" + name + "' names block " + std::to_string(id) + ", which has no particle");
+    if (!entryOf.count(id)) {
+      b.localFail("block " + std::to_string(id) + " (" + std::to_string(n) + " particles) has no entry under 'Blocks'; give every block its material");
+      break;
+    }
+  for (const auto& [id, name] : entryOf)  // every rank has the same entries: the sums agree
+    if (b.sumOverRanks(count.count(id) ? count.at(id) : 0) == 0)
+      fail(file, "block '" + name + "' names block " + std::to_string(id) + ", which has no particle");
 }
 
 /// One region's particles.
@@ -1401,7 +1454,8 @@ std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::
   const std::string type = r.get<std::string>("Type");
   const std::string popName = r.get<std::string>("Population");
   const Population pop = r.choice<Population>("Population");
-  const bool anyFictitious = std::any_of(d.fictitious.begin(), d.fictitious.end(), [](std::uint8_t f) { return f != 0; });
+  const bool anyFictitious =
+      b.sumOverRanks(std::any_of(d.fictitious.begin(), d.fictitious.end(), [](std::uint8_t f) { return f != 0; }) ? 1 : 0) > 0;
   if (!anyFictitious && (type == "All Fictitious" || type == "Fictitious Side" || ((type == "Box" || type == "Nearest") && popName == "Fictitious")))
     fail(b.file, "region '" + name + "' selects fictitious particles, but the body has none (see 'Discretization/Fictitious Sides')");
   auto side = [&]() {
@@ -1419,15 +1473,29 @@ std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::
   } else if (type == "Fictitious Side") {
     ids = selectFictitiousSide(d, side());
   } else if (type == "Nearest") {
-    const int p = selectNearest(d, vec3(r.get<Array<double>>("Point")), pop);
-    if (p >= 0) ids.push_back(p);
+    const Vec3 point = vec3(r.get<Array<double>>("Point"));
+    const int p = selectNearest(d, point, pop);
+    if (!b.distributed()) {
+      if (p >= 0) ids.push_back(p);
+    } else {  // the nearest over the ranks' shares (ties: the lowest global id, as on the whole body)
+      double mine = std::numeric_limits<double>::infinity(), best = mine;
+      if (p >= 0) {
+        mine = 0;
+        for (int a = 0; a < d.dim; ++a) mine += (d.X[p][a] - point[a]) * (d.X[p][a] - point[a]);
+      }
+      Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(best));
+      long long id = p >= 0 && mine == best ? b.gid(p) : std::numeric_limits<long long>::max(), first = id;
+      Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, id, Teuchos::outArg(first));
+      if (first != std::numeric_limits<long long>::max() && std::binary_search(b.problem.globalId.begin(), b.problem.globalId.end(), first))
+        ids.push_back(b.problem.index(first));
+    }
   } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
     ids = meshSetRegion(b, r, name, type);
   } else {  // All Fictitious or All Real
     for (int i = 0; i < d.size(); ++i)
       if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);
   }
-  if (ids.empty()) fail(b.file, "region '" + name + "' selects no particle");
+  if (b.sumOverRanks(static_cast<long long>(ids.size())) == 0) fail(b.file, "region '" + name + "' selects no particle");
   return ids;
 }
 
@@ -1435,7 +1503,7 @@ void readRegions(SceneBuild& b) {
   const Section rl = b.section("Regions");
   for (auto it = rl.list.begin(); it != rl.list.end(); ++it) {
     const std::string name = rl.list.name(it);
-    b.sc.regions[name] = selectRegion(b, rl.entry(name, "Regions"), name);
+    b.sc.regions[name] = b.problem.globalIds(selectRegion(b, rl.entry(name, "Regions"), name));  // global ids
   }
 }
 
@@ -1463,16 +1531,17 @@ void readBoundaryConditions(SceneBuild& b) {
     const double value = c.get<double>("Value");
     const auto grad = c.get<Array<double>>("Gradient");
     conditionNames.push_back(name);
-    for (int p : ids)
+    for (int g : ids)
       for (int k = 0; k < dim; ++k) {
         if (comp >= 0 && k != comp) continue;
+        const int p = P.index(g);
         double v = value;
         for (int a = 0; a < static_cast<int>(grad.size()); ++a) v += grad[a] * d.X[p][a];
         const std::size_t dof = static_cast<std::size_t>(p) * dim + k;
         if (prescribedBy[dof] >= 0) {
           const double old = P.prescribed[dof];
           if (std::abs(v - old) > 1e-12 * std::max({std::abs(v), std::abs(old), d.dx}))
-            fail(b.file, "boundary conditions '" + conditionNames[prescribedBy[dof]] + "' and '" + name + "' prescribe different values (" +
+            b.localFail("boundary conditions '" + conditionNames[prescribedBy[dof]] + "' and '" + name + "' prescribe different values (" +
                              number(old) + " and " + number(v) + ") for component " + "xyz"[k] + " of the particle at " + position(d, p) +
                              "; a component may be prescribed twice only with the same value");
           continue;
@@ -1482,9 +1551,24 @@ void readBoundaryConditions(SceneBuild& b) {
         P.prescribed[dof] = v;
       }
   }
-  // Rank of the rigid modes restricted to prescribed DOFs (the evaluator checks it too, for
-  // problems built in C++; here the message names the scene's keys).
-  if (!preventsRigidMotion(P))
+}
+
+/// Rank of the rigid modes restricted to prescribed DOFs (the evaluator checks it too, for
+/// problems built in C++; here the message names the scene's keys). Its own step: distributed,
+/// the Gram matrix is summed over the ranks after they agreed on the conditions.
+void checkRigidMotion(SceneBuild& b) {
+  const ProblemSpec& P = b.problem;
+  b.sc.prescribesDisplacement = b.sumOverRanks(P.prescribesDisplacement() ? 1 : 0) > 0;
+  bool prevents = false;
+  if (!P.distributed) {
+    prevents = preventsRigidMotion(P);
+  } else {
+    const Eigen::MatrixXd mine = rigidModeGram(P);
+    Eigen::MatrixXd all(mine.rows(), mine.cols());
+    Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_SUM, static_cast<int>(mine.size()), mine.data(), all.data());
+    prevents = gramHasFullRank(all);
+  }
+  if (!prevents)
     fail(b.file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
 }
 
@@ -1497,12 +1581,19 @@ void readLoads(SceneBuild& b) {
     const auto& ids = b.region("Loads/" + name + "/Region", l.get<std::string>("Region"));
     const Vec3 value = vec3(l.get<Array<double>>("Value"));
     const std::string type = l.get<std::string>("Type");
-    double totalV = 0;
-    for (int p : ids) totalV += d.volume[p];
+    double totalV = 0, mine = 0;  // the region's volume (owned particles, over the ranks, when distributed)
+    for (int g : ids)
+      if (b.owns(g)) mine += d.volume[b.problem.index(g)];
+    totalV = mine;
+    if (b.distributed()) Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(totalV));
     // Per unit volume: Total Force spreads over the region; a Traction's layer is one spacing thick.
     const double scale = type == "Total Force" ? 1.0 / totalV : type == "Traction" ? 1.0 / d.dx : 1.0;
-    for (int p : ids) {
-      if (d.fictitious[p]) fail(b.file, "load '" + name + "' acts on fictitious particles; loads go on real particles");
+    for (int g : ids) {
+      const int p = b.problem.index(g);
+      if (d.fictitious[p]) {
+        b.localFail("load '" + name + "' acts on fictitious particles; loads go on real particles");
+        break;
+      }
       for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += value[c] * scale;
     }
   }
@@ -1526,9 +1617,11 @@ void readRotation(SceneBuild& b) {
   // body: not supported, so say which particle.
   const std::uint8_t all = static_cast<std::uint8_t>((1u << dim) - 1);
   for (int p = 0; p < b.problem.disc.size(); ++p)
-    if (b.problem.fixedMask[p] != 0 && b.problem.fixedMask[p] != all)
-      fail(b.file, "'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " +
-                       std::to_string(p) + " at " + position(b.problem.disc, p) + " has only some (a roller's direction would have to turn with the body)");
+    if (b.problem.fixedMask[p] != 0 && b.problem.fixedMask[p] != all) {
+      b.localFail("'Superposed Rotation' needs every constrained particle to have all components prescribed; particle " +
+                       std::to_string(b.gid(p)) + " at " + position(b.problem.disc, p) + " has only some (a roller's direction would have to turn with the body)");
+      break;
+    }
 }
 
 void readProbes(SceneBuild& b) {
@@ -1708,6 +1801,9 @@ void readOutput(SceneBuild& b) {
   if (out.format != "VTU" && !exodusAvailable())
     fail(b.file, "'Output/Format' = " + out.format + ", but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
   out.plots = o.get<bool>("Plots");
+  if (out.format != "VTU" && b.distributed())
+    fail(b.file, "'Output/Format' = " + out.format + " gathers the whole body on rank 0, which 'Discretization/Construction' = "
+                 "Distributed does not hold; use Format = VTU (a pvtu piece per rank)");
 }
 
 /// The sublist functions, in the order a scene is read (later ones use what earlier ones built:
@@ -1717,7 +1813,7 @@ using SceneStep = void (*)(SceneBuild&);
 const std::vector<SceneStep>& sceneSteps() {
   static const std::vector<SceneStep> steps{
       readMaterial, readDiscretization, readStabilization, readModulusField, readControls,
-      readDamage,   readBlocks,         readRegions,        readBoundaryConditions, readLoads,   readRotation,
+      readDamage,   readBlocks,         readRegions,        readBoundaryConditions, checkRigidMotion, readLoads, readRotation,
       readProbes,   readReference,      readSolver,        readLinearSolver, readOutput};
   return steps;
 }
@@ -1746,6 +1842,27 @@ int checkScene(ParameterList& pl, const ParameterList& schema, const std::string
   return dim;
 }
 
+/// Runs a scene step. Once the discretisation is distributed, the ranks agree on its outcome: a
+/// failure on any rank (thrown, or recorded by localFail) becomes the same SceneError on every
+/// rank, the lowest failing rank's sentence, so none is left waiting in a later collective.
+void runStep(SceneStep step, SceneBuild& b) {
+  if (!b.distributed()) {  // every rank sees the same (the distributed construction fails on all alike)
+    step(b);
+    return;
+  }
+  std::string msg;
+  try {
+    step(b);
+  } catch (const SceneError& e) {
+    msg = e.what();
+  } catch (const std::exception& e) {
+    msg = failMessage(b.file, e.what());
+  }
+  if (msg.empty() && !b.localError.empty()) msg = failMessage(b.file, b.localError);
+  b.localError.clear();
+  if (msg = lowestRankMessage(*b.comm, msg); !msg.empty()) throw SceneError(msg);
+}
+
 }  // namespace
 
 Teuchos::RCP<const ParameterList> sceneSchema() {
@@ -1753,15 +1870,17 @@ Teuchos::RCP<const ParameterList> sceneSchema() {
   return s;
 }
 
-Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir) {
+Scene buildScene(ParameterList pl, const std::string& file, const std::string& presetDir,
+                 const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
   const auto schema = sceneSchema();
   const int dim = checkScene(pl, *schema, file);
   Scene sc;
   sc.file = file;
   sc.title = pl.get<std::string>("Title");
   auto problem = std::make_shared<ProblemSpec>();
-  SceneBuild build{sc, *problem, pl, *schema, file, presetDir, dim, ExodusMesh()};
-  for (const SceneStep step : sceneSteps()) step(build);
+  SceneBuild build{sc, *problem, pl, *schema, file, presetDir, dim, ExodusMesh(),
+                   comm.is_null() ? Teuchos::DefaultComm<int>::getComm() : comm, ""};
+  for (const SceneStep step : sceneSteps()) runStep(step, build);
   sc.problem = problem;
   const SolverSettings& s = sc.solver;
   sc.resolved = Teuchos::rcp(new ParameterList(pl));
@@ -1771,7 +1890,8 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   return sc;
 }
 
-Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir) {
+Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir,
+                const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
   const std::string text = readSceneText(path);
   ParameterList pl;
   try {
@@ -1787,7 +1907,7 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   const auto schema = sceneSchema();
   for (const auto& o : overrides) applyOverride(pl, o, *schema);
   try {
-    return buildScene(pl, path, presetDir);
+    return buildScene(pl, path, presetDir, comm);
   } catch (const SceneError& e) {
     // A key that a --set gave: name that argument too (the latest one wins, as in applyOverride).
     const std::string msg = e.what();

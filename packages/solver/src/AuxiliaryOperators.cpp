@@ -59,7 +59,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   // (a zero column there made MueLu throw, docs/trilinos-notes.md).
   double local[4] = {0, 0, 0, 0}, global[4];
   for (long long p : ev.ownedParticles()) {
-    for (int d = 0; d < 3; ++d) local[d] += P.disc.X[p][d];
+    for (int d = 0; d < 3; ++d) local[d] += P.disc.X[P.index(p)][d];
     local[3] += 1;
   }
   Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, 4, local, global);
@@ -72,7 +72,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
     auto col = B->getDataNonConst(m);
     LO k = 0;
     for (long long p : ev.ownedParticles()) {
-      const Eigen::Vector3d r = (P.disc.X[p] - centre) / L;
+      const Eigen::Vector3d r = (P.disc.X[P.index(p)] - centre) / L;
       for (int a = 0; a < D; ++a) {
         double v = 0;
         if (m < D) {
@@ -91,7 +91,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   for (int d = 0; d < D; ++d) {
     auto col = C->getDataNonConst(d);
     LO k = 0;
-    for (long long p : ev.ownedParticles()) col[k++] = P.disc.X[p][d];
+    for (long long p : ev.ownedParticles()) col[k++] = P.disc.X[P.index(p)][d];
   }
   a.nullspace = B;
   a.coordinates = C;
@@ -233,9 +233,13 @@ class LatticeFemSource final : public AuxiliarySource {
     std::map<GO, double> row[3];
     std::vector<GO> cols;
     std::vector<double> vals;
+    // Cell nodes are indices into P.disc (the whole body, or a distributed problem's share, which
+    // holds every node of an owned particle's cells: they lie within sqrt(D) dx <= 2 horizons).
+    auto gid = [&](int node) { return P.distributed ? P.globalId[node] : static_cast<long long>(node); };
     for (long long p : ev.ownedParticles()) {
       for (int c = 0; c < D; ++c) row[c].clear();
-      const long long i = ijk[p][0], j = ijk[p][1], k = ijk[p][2];
+      const int ip = P.index(p);
+      const long long i = ijk[ip][0], j = ijk[ip][1], k = ijk[ip][2];
       for (int cell = 0; cell < nn; ++cell) {  // the cells having p as a corner
         const long long c0[3] = {i - (cell & 1), D > 1 ? j - ((cell >> 1) & 1) : 0, D > 2 ? k - ((cell >> 2) & 1) : 0};
         int nodes[8];
@@ -250,7 +254,7 @@ class LatticeFemSource final : public AuxiliarySource {
           scale = 0;
           for (int a = 0; a < nn; ++a) scale += P.modulusScale[nodes[a]] / nn;
         }
-        const int me = static_cast<int>(std::find(nodes, nodes + nn, static_cast<int>(p)) - nodes);
+        const int me = static_cast<int>(std::find(nodes, nodes + nn, ip) - nodes);
         Eigen::MatrixXd cellKe;
         if (!blockOf.empty()) {  // blocks: the mean of the corners' block stiffnesses (times their scales)
           cellKe = Eigen::MatrixXd::Zero(Ke.rows(), Ke.cols());
@@ -263,8 +267,8 @@ class LatticeFemSource final : public AuxiliarySource {
           if (ev.freeDof(p, c) < 0) continue;
           for (int a = 0; a < nn; ++a)
             for (int e = 0; e < D; ++e)
-              if (!P.isFixed(nodes[a], e))  // prescribed columns eliminated (a node need not be local)
-                row[c][static_cast<GO>(nodes[a]) * D + e] += scale * K(me * D + c, a * D + e);
+              if (!((P.fixedMask[nodes[a]] >> e) & 1u))  // prescribed columns eliminated (a node need not be local)
+                row[c][static_cast<GO>(gid(nodes[a])) * D + e] += scale * K(me * D + c, a * D + e);
         }
       }
       for (int c = 0; c < D; ++c) {
@@ -453,7 +457,12 @@ std::shared_ptr<AuxiliarySource> makeAuxiliarySource(Teuchos::RCP<const Peridyna
   const ProblemSpec& P = evaluator->problem();
   const std::string kind =
       twoStage.isType<std::string>("Auxiliary Operator") ? twoStage.get<std::string>("Auxiliary Operator") : "Auto";
-  const bool lattice = onLattice(P.disc);
+  bool lattice = onLattice(P.disc);
+  if (P.distributed) {  // every rank's share must be (the ranks then agree on the operator)
+    int mine = lattice ? 1 : 0, all = 0;
+    Teuchos::reduceAll(*evaluator->comm(), Teuchos::REDUCE_MIN, mine, Teuchos::outArg(all));
+    lattice = all != 0;
+  }
   if (kind == "Lattice FEM" || (kind == "Auto" && lattice && !P.damage)) {
     if (!lattice)
       throw std::invalid_argument(

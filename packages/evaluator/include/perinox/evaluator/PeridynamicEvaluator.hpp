@@ -146,6 +146,10 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// The particles this rank owns (global ids, sorted; `Discretization/Partition` chose them).
   /// The owned arrays of this class (displacements, outputs, damage) are in this order.
   const std::vector<long long>& ownedParticles() const { return owned_; }
+  /// Whether a non-zero displacement is prescribed anywhere (over all ranks' shares).
+  bool prescribesDisplacement() const { return prescribesDisplacement_; }
+  /// Owned + ghost particles this rank evaluates (the ghosts: family members owned elsewhere).
+  long long localParticleCount() const { return model_->particles().size(); }
   /// Position of global particle g in ownedParticles(), or -1 if another rank owns it.
   int ownedIndex(long long g) const { return model_->particles().ownedLocal(g); }
   long long numFreeDofs() const { return dofs_.numFree; }
@@ -195,6 +199,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   Teuchos::RCP<TVector> fextOwnedFree_;  // f_ext at lambda = 1 on owned free DOFs
   double fextNorm_ = 0.0;                 // its global 2-norm (the load never changes)
   double roundoffScale_ = 0.0;
+  bool prescribesDisplacement_ = false;  // over all ranks (P.prescribesDisplacement() is the share's)
 
   Teuchos::RCP<const Thyra::VectorSpaceBase<double>> xSpace_, pSpace_;
   Teuchos::RCP<const Thyra::LinearOpWithSolveFactoryBase<double>> wFactory_;

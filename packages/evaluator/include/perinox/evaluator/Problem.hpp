@@ -1,6 +1,7 @@
 #pragma once
-// A complete, validated problem description, free of Trilinos types: the discretisation
-// (replicated on every rank), the material, the effects a scene enables, and the loading.
+// A complete, validated problem description, free of Trilinos types: the discretisation (the
+// whole body on every rank, or, distributed, each rank's share of it), the material, the effects
+// a scene enables, and the loading.
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -12,6 +13,11 @@
 #include "perinox/material/Material.hpp"
 #include "perinox/model/Model.hpp"
 #include "perinox/model/Partition.hpp"
+
+namespace Teuchos {
+template <class T> class RCP;
+template <class O> class Comm;
+}  // namespace Teuchos
 
 namespace perinox {
 
@@ -60,8 +66,31 @@ struct ProblemSpec {
   RotationSpec rotation;                // superposed rigid rotation (angle 0: none, costs nothing)
   PartitionMethod partition = PartitionMethod::Rcb;  // which particles each MPI rank owns
 
+  // Distributed form (issue 17; problemOnLocalLattice builds it). false: disc and the
+  // per-particle arrays above (modulusScale, fixedMask, prescribed, bodyForce, disc.block) cover
+  // the whole body, the same on every rank, and a particle's index is its global id. true: they
+  // cover this rank's share only: the particles it owns (`owned`, sorted global ids, already
+  // partitioned: `partition` is not consulted) and every particle within two horizons of them;
+  // disc's particle i is global particle globalId[i] (ascending), globalCount particles in all.
+  // No array of the whole body's size exists on any rank. The evaluator speaks global ids
+  // (ownedParticles, freeDof, reactionOn, ...); region selections on the share's disc give
+  // indices into it, which globalId turns into global ids.
+  bool distributed = false;
+  std::vector<long long> globalId;
+  std::vector<long long> owned;
+  long long globalCount = 0;
+
   int dim() const { return disc.dim; }
-  bool isFixed(int p, int c) const { return (fixedMask[p] >> c) & 1u; }
+  /// Particles of the whole body.
+  long long particleCount() const { return distributed ? globalCount : disc.size(); }
+  /// Index into disc (and the per-particle arrays) of global particle g: g itself unless
+  /// distributed. Throws std::out_of_range when this rank's share does not hold g.
+  int index(long long g) const;
+  /// The global ids of particles given by their indices into disc (a region selected on a
+  /// distributed problem's share, for the evaluator's reactionOn or meanDisplacement).
+  std::vector<int> globalIds(const std::vector<int>& indices) const;
+  /// Whether component c of global particle g is prescribed.
+  bool isFixed(long long g, int c) const { return (fixedMask[index(g)] >> c) & 1u; }
   bool rotates() const { return rotation.angle != 0.0; }
   /// The stabilisation's parameters as the model gets them: stab, with C = micromodulusC(material,
   /// disc.horizon, disc.thickness) when it was left at StabilizationSpec::kFromMaterial (a host
@@ -94,14 +123,33 @@ void prescribe(ProblemSpec& problem, const std::vector<int>& particles, int comp
 /// The same with one value for all of them (0: a support).
 void prescribe(ProblemSpec& problem, const std::vector<int>& particles, int component, double value = 0.0);
 
+/// A distributed problem on this rank's share of a lattice (collective over comm): the particles
+/// are generated in slabs and partitioned by `partition` (the same owners as ownedParticles gives
+/// the whole lattice), and each rank keeps its owned particles and those within two horizons of
+/// them; no rank builds an array of the whole lattice's size. Loading arrays sized, nothing
+/// prescribed, as problemOnLattice. The selection helpers (selectBox, selectSideLayer, ...) work
+/// on the share's disc (the real body's box is the whole lattice's), so prescribe() applies a
+/// geometric condition rank by rank. Defined in Partitioner.cpp (Zoltan2).
+std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                   const LatticeSpec& lattice, const MaterialSpec& material,
+                                                   PartitionMethod partition = PartitionMethod::Rcb);
+
+/// The Gram matrix of the rigid-body modes (translations and rotations about the body's box
+/// centre, lengths in units of dx) restricted to the prescribed DOFs of the particles counted:
+/// all of disc, or the owned ones when distributed (sum it over the ranks).
+Eigen::MatrixXd rigidModeGram(const ProblemSpec& problem);
+/// Whether a (summed) Gram matrix has full rank.
+bool gramHasFullRank(const Eigen::MatrixXd& M);
 /// Whether the prescribed DOFs (fixedMask) remove every rigid-body mode (translations and
 /// rotations about the body's centre): the modes restricted to the prescribed DOFs have full rank.
+/// For a distributed problem the evaluator sums rigidModeGram over the ranks instead.
 bool preventsRigidMotion(const ProblemSpec& problem);
 
 /// Checks a problem built in C++ (or from a scene) for what the evaluator cannot work with: array
 /// sizes against the particle count and dimension, finite coordinates, volumes, loads and material
 /// constants, a horizon of at least one spacing, consistent effect parameters, and that the
-/// prescribed DOFs leave no rigid-body mode free (preventsRigidMotion). Throws
+/// prescribed DOFs leave no rigid-body mode free (preventsRigidMotion; for a distributed problem,
+/// which it checks for its share's consistency, the evaluator checks this collectively). Throws
 /// std::invalid_argument with one sentence naming the field ("ProblemSpec: ...") otherwise. The
 /// evaluator's constructor calls it, so a host program gets the errors a scene gets.
 void validateProblem(const ProblemSpec& problem);

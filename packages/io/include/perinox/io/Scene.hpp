@@ -4,6 +4,7 @@
 // values, references to undefined regions, no constraint against rigid motion) and turns it
 // into a ProblemSpec plus solver, probe and output settings.
 #include <Teuchos_ParameterList.hpp>
+#include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
 #include <cmath>
 #include <map>
@@ -94,8 +95,9 @@ struct Scene {
   std::string file;
   std::string title;
   std::shared_ptr<ProblemSpec> problem;
-  std::map<std::string, std::vector<int>> regions;
+  std::map<std::string, std::vector<int>> regions;  // global particle ids (distributed: those of the rank's share)
   std::vector<ProbeDef> probes;
+  bool prescribesDisplacement = false;            // a non-zero displacement is prescribed (on any rank)
   ReferenceDef reference;
   SolverSettings solver;
   OutputSettings output;
@@ -108,12 +110,16 @@ struct Scene {
 };
 
 /// Reads, overrides (each "Sublist/Key=value"), validates and builds a scene.
-/// presetDir is where "Linear Solver Preset" names are looked up (xml/solvers).
+/// presetDir is where "Linear Solver Preset" names are looked up (xml/solvers). Every rank of
+/// comm (default: Teuchos' default communicator) builds it; with `Discretization/Construction` =
+/// Distributed each builds only its share (collective), and the regions are lists of global ids
+/// in either case (a distributed scene's: the particles of the rank's share).
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides,
-                const std::string& presetDir);
+                const std::string& presetDir, const Teuchos::RCP<const Teuchos::Comm<int>>& comm = Teuchos::null);
 
 /// The same from an in-memory list (tests). `file` is only used in messages.
-Scene buildScene(Teuchos::ParameterList pl, const std::string& file, const std::string& presetDir);
+Scene buildScene(Teuchos::ParameterList pl, const std::string& file, const std::string& presetDir,
+                 const Teuchos::RCP<const Teuchos::Comm<int>>& comm = Teuchos::null);
 
 /// The schema with defaults and documentation, for --help and docs.
 Teuchos::RCP<const Teuchos::ParameterList> sceneSchema();

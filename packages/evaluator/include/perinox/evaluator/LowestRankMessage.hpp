@@ -1,0 +1,26 @@
+#pragma once
+// Agreeing on a failure across ranks: the ranks that failed pass their sentence, the others an
+// empty one, and every rank gets the same answer, so all of them throw (or none does) and no rank
+// is left waiting in a later collective for one that stopped.
+#include <Teuchos_Comm.hpp>
+#include <Teuchos_CommHelpers.hpp>
+#include <string>
+
+namespace perinox {
+
+/// The message of the lowest rank whose `msg` is not empty, on every rank; "" when none is.
+/// Collective over comm. `rank`, if given, receives that rank (comm.getSize() when none failed).
+inline std::string lowestRankMessage(const Teuchos::Comm<int>& comm, std::string msg, int* rank = nullptr) {
+  const int size = comm.getSize();
+  int mine = msg.empty() ? size : comm.getRank(), first = size;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(first));
+  if (rank) *rank = first;
+  if (first == size) return "";
+  int length = static_cast<int>(msg.size());
+  Teuchos::broadcast(comm, first, Teuchos::outArg(length));
+  msg.resize(static_cast<std::size_t>(length));
+  if (length > 0) Teuchos::broadcast(comm, first, length, msg.data());
+  return msg;
+}
+
+}  // namespace perinox
