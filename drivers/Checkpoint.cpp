@@ -196,7 +196,7 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
   auto freeDof = [&](long long g) {
     if (g < 0 || g >= particles * D) return false;
     // A distributed problem knows its share only: another rank's DOF is checked by that rank.
-    if (P.distributed && !std::binary_search(P.globalId.begin(), P.globalId.end(), g / D)) return true;
+    if (!P.holds(g / D)) return true;
     return !P.isFixed(g / D, static_cast<int>(g % D));
   };
   std::ifstream in(f);

@@ -102,8 +102,7 @@ void measureFootprint(const PeridynamicEvaluator& ev, const Teuchos::Comm<int>& 
   long long countsMax[3];
   Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, 3, counts, countsMax);
   // Particles the rank's discretisation holds: the whole body (Construction = Replicated) or its
-  // share (Distributed: owned and those within two horizons).
-  // A distributed share is the owned particles and those within two horizons of the owned box:
+  // share (Distributed): the owned particles and those within two horizons of the owned box, i.e.
   // the ghost layer (one horizon), a second layer about as wide, and the box's corners; measured
   // at most 2.7 x the ghosts beyond the owned on every paper scene. A rank above 3 x holds more
   // than its share (on 2 or more ranks, a replicated discretisation does).
@@ -158,8 +157,9 @@ StepSolve adrStepSolve(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluat
   };
 }
 
-/// The scene's load-stepping controls, through the stepper's validated list.
-LoadStepperOptions loadSteppingOptions(const Scene& scene) {
+/// The scene's load-stepping controls, through the stepper's validated list (the tangent
+/// predictor when the evaluator prescribes motion on any rank).
+LoadStepperOptions loadSteppingOptions(const Scene& scene, const PeridynamicEvaluator& ev) {
   const auto& s = scene.solver;
   const bool adr = s.method == "ADR";
   Teuchos::ParameterList l("Load Stepping");
@@ -175,7 +175,7 @@ LoadStepperOptions loadSteppingOptions(const Scene& scene) {
   // damaged plate, starting from the unloaded body put stretch 0.0067 into the bonds next to the
   // loaded particles, past s_cr; the first step stagnated). Dead loads do not need it (it equals
   // Newton's first iteration there).
-  l.set("Tangent Predictor", !adr && (scene.problem->rotates() || scene.prescribesDisplacement));
+  l.set("Tangent Predictor", !adr && (scene.problem->rotates() || ev.prescribesDisplacement()));
   LoadStepperOptions o = LoadStepperOptions::fromParameterList(l, scene.file);
   o.keyPrefix = "Solver/";
   return o;
@@ -269,7 +269,7 @@ Solved loadStepping(const SolveContext& c, const std::optional<Checkpoint>& resu
                                               newtonOptions(scene.solver)));
   const StepSolve newtonSolve = [newton](Thyra::VectorBase<double>& xs) { return newton->solve(xs); };
   LoadStepper stepper(c.model, scene.solver.method == "ADR" ? adrStepSolve(scene, c.evaluator) : newtonSolve,
-                      loadSteppingOptions(scene));
+                      loadSteppingOptions(scene, *c.evaluator));
   stepper.setReequilibrationSolve(newtonSolve);
   const auto damage = damagePolicy(scene, *c.evaluator);
   if (damage) stepper.setDamagePolicy(damage.get());

@@ -43,16 +43,21 @@ void validateTogether(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
     return;
   }
   if (err = lowestRankMessage(comm, err); !err.empty()) throw std::invalid_argument(err);
-  const Eigen::MatrixXd mineGram = rigidModeGram(P);
-  Eigen::MatrixXd gram(mineGram.rows(), mineGram.cols());
-  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, static_cast<int>(mineGram.size()), mineGram.data(), gram.data());
-  if (!gramHasFullRank(gram))
+  if (!preventsRigidMotion(comm, P))
     throw std::invalid_argument(
         "ProblemSpec: the prescribed DOFs (fixedMask) do not prevent rigid-body motion: a translation or rotation of "
         "the whole body is free; prescribe more components");
 }
 
 }  // namespace
+
+bool preventsRigidMotion(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
+  if (!P.distributed) return preventsRigidMotion(P);
+  const Eigen::MatrixXd mine = rigidModeGram(P);
+  Eigen::MatrixXd all(mine.rows(), mine.cols());
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, static_cast<int>(mine.size()), mine.data(), all.data());
+  return gramHasFullRank(all);
+}
 
 PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
                                            std::shared_ptr<const ProblemSpec> problem)

@@ -210,12 +210,14 @@ std::vector<int> ProblemSpec::globalIds(const std::vector<int>& indices) const {
   return out;
 }
 
+bool ProblemSpec::holds(long long g) const {
+  return distributed ? std::binary_search(globalId.begin(), globalId.end(), g) : g >= 0 && g < disc.size();
+}
+
 int ProblemSpec::index(long long g) const {
   if (!distributed) return static_cast<int>(g);
-  const auto it = std::lower_bound(globalId.begin(), globalId.end(), g);
-  if (it == globalId.end() || *it != g)
-    throw std::out_of_range("ProblemSpec: particle " + std::to_string(g) + " is not in this rank's share");
-  return static_cast<int>(it - globalId.begin());
+  if (!holds(g)) throw std::out_of_range("ProblemSpec: particle " + std::to_string(g) + " is not in this rank's share");
+  return static_cast<int>(std::lower_bound(globalId.begin(), globalId.end(), g) - globalId.begin());
 }
 
 void validateProblem(const ProblemSpec& P) {

@@ -996,7 +996,7 @@ struct SceneBuild {
   bool distributed() const { return problem.distributed; }
   /// A failure found in this rank's data. Replicated: every rank finds it; fail now. Distributed:
   /// other ranks may not, so record it and go on to the step's end, where the ranks agree
-  /// (agreeOnStep) and all fail with the lowest failing rank's sentence.
+  /// (runStep) and all fail with the lowest failing rank's sentence.
   void localFail(const std::string& msg) {
     if (!distributed()) fail(file, msg);
     if (localError.empty()) localError = msg;
@@ -1486,8 +1486,7 @@ std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::
       Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(best));
       long long id = p >= 0 && mine == best ? b.gid(p) : std::numeric_limits<long long>::max(), first = id;
       Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, id, Teuchos::outArg(first));
-      if (first != std::numeric_limits<long long>::max() && std::binary_search(b.problem.globalId.begin(), b.problem.globalId.end(), first))
-        ids.push_back(b.problem.index(first));
+      if (first != std::numeric_limits<long long>::max() && b.problem.holds(first)) ids.push_back(b.problem.index(first));
     }
   } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
     ids = meshSetRegion(b, r, name, type);
@@ -1557,18 +1556,7 @@ void readBoundaryConditions(SceneBuild& b) {
 /// problems built in C++; here the message names the scene's keys). Its own step: distributed,
 /// the Gram matrix is summed over the ranks after they agreed on the conditions.
 void checkRigidMotion(SceneBuild& b) {
-  const ProblemSpec& P = b.problem;
-  b.sc.prescribesDisplacement = b.sumOverRanks(P.prescribesDisplacement() ? 1 : 0) > 0;
-  bool prevents = false;
-  if (!P.distributed) {
-    prevents = preventsRigidMotion(P);
-  } else {
-    const Eigen::MatrixXd mine = rigidModeGram(P);
-    Eigen::MatrixXd all(mine.rows(), mine.cols());
-    Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_SUM, static_cast<int>(mine.size()), mine.data(), all.data());
-    prevents = gramHasFullRank(all);
-  }
-  if (!prevents)
+  if (!preventsRigidMotion(*b.comm, b.problem))
     fail(b.file, "the boundary conditions do not prevent rigid-body motion (a translation or rotation of the whole body is free); constrain more components under 'Boundary Conditions'");
 }
 

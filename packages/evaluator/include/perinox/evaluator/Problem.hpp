@@ -83,6 +83,8 @@ struct ProblemSpec {
   int dim() const { return disc.dim; }
   /// Particles of the whole body.
   long long particleCount() const { return distributed ? globalCount : disc.size(); }
+  /// Whether disc holds global particle g (any g of the body unless distributed).
+  bool holds(long long g) const;
   /// Index into disc (and the per-particle arrays) of global particle g: g itself unless
   /// distributed. Throws std::out_of_range when this rank's share does not hold g.
   int index(long long g) const;
@@ -142,8 +144,11 @@ Eigen::MatrixXd rigidModeGram(const ProblemSpec& problem);
 bool gramHasFullRank(const Eigen::MatrixXd& M);
 /// Whether the prescribed DOFs (fixedMask) remove every rigid-body mode (translations and
 /// rotations about the body's centre): the modes restricted to the prescribed DOFs have full rank.
-/// For a distributed problem the evaluator sums rigidModeGram over the ranks instead.
+/// For a distributed problem use the collective form below.
 bool preventsRigidMotion(const ProblemSpec& problem);
+/// The same over the ranks of comm (collective): a distributed problem's rigidModeGram summed over
+/// the ranks; a replicated one's on its own. Defined in PeridynamicEvaluator.cpp.
+bool preventsRigidMotion(const Teuchos::Comm<int>& comm, const ProblemSpec& problem);
 
 /// Checks a problem built in C++ (or from a scene) for what the evaluator cannot work with: array
 /// sizes against the particle count and dimension, finite coordinates, volumes, loads and material

@@ -97,7 +97,6 @@ struct Scene {
   std::shared_ptr<ProblemSpec> problem;
   std::map<std::string, std::vector<int>> regions;  // global particle ids (distributed: those of the rank's share)
   std::vector<ProbeDef> probes;
-  bool prescribesDisplacement = false;            // a non-zero displacement is prescribed (on any rank)
   ReferenceDef reference;
   SolverSettings solver;
   OutputSettings output;
