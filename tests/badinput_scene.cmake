@@ -196,6 +196,12 @@ perinox_bad_input_distributed(distributed_bc_conflict 3 ${TINY} "boundary condit
 perinox_bad_input_distributed(distributed_load_on_fictitious 3 ${TINY} "load 'tip load' acts on fictitious particles"
   --set "Loads/tip load/Region=right")
 perinox_bad_input_distributed(distributed_no_rigid_constraint 3 ${BAD}/no_constraint.xml "do not prevent rigid-body motion")
-perinox_bad_input_distributed(distributed_particle_file 2 ${XML}/peridigm_tensile.xml
-  "'Discretization/Construction' = Distributed is for lattices so far")
+# A particle file read distributed: each rank reads its slice of the bytes, and a bad line in any
+# slice is refused on every rank with the message of a whole-file read (the same line number).
+perinox_bad_input_distributed(distributed_particle_file_nul 3 ${GEN}/particle_file_nul.xml "nul_particles.txt:10: contains a NUL byte")
+perinox_bad_input_distributed(distributed_particle_file_late 3 ${GEN}/particle_file_late_garbage.xml
+  "late_garbage_particles.txt:200: '1.0x' is not a number")
+perinox_bad_input(particle_file_late ${GEN}/particle_file_late_garbage.xml "late_garbage_particles.txt:200: '1.0x' is not a number")
+perinox_bad_input_distributed(distributed_exodus_mesh 2 ${PROJECT_SOURCE_DIR}/tests/exodus/quad_exodus.xml
+  "'Discretization/Construction' = Distributed is for lattices and particle files so far")
 perinox_bad_input_distributed(distributed_exodus_output 2 ${TINY} "gathers the whole body on rank 0" --set "Output/Format=Exodus")

@@ -7,6 +7,7 @@
 #include <Teuchos_CommHelpers.hpp>
 #include <Teuchos_DefaultComm.hpp>
 #include <algorithm>
+#include <fstream>
 
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Thyra_VectorStdOps.hpp>
@@ -113,6 +114,18 @@ void expectSameMatrix(const TCrsMatrix& a, const TCrsMatrix& b, const std::strin
     ASSERT_EQ(std::vector<LO>(ca.begin(), ca.end()), std::vector<LO>(cb.begin(), cb.end())) << what << ", row " << r;
     ASSERT_EQ(std::vector<double>(va.begin(), va.end()), std::vector<double>(vb.begin(), vb.end())) << what << ", row " << r;
   }
+}
+
+/// The evaluator on both problems owns the same particles, has the same free-DOF map and gives the
+/// same residual and Jacobians, bit for bit.
+void expectSameEvaluation(const std::shared_ptr<ProblemSpec>& whole, const std::shared_ptr<ProblemSpec>& share,
+                          const std::string& what) {
+  const Evaluated a = evaluate(whole), b = evaluate(share);
+  ASSERT_EQ(a.owned, b.owned) << what;
+  ASSERT_TRUE(a.freeMap->isSameAs(*b.freeMap)) << what;
+  ASSERT_EQ(a.f, b.f) << what;
+  expectSameMatrix(*a.J, *b.J, what + ", full Jacobian");
+  expectSameMatrix(*a.Jn, *b.Jn, what + ", neighbour Jacobian");
 }
 
 }  // namespace
@@ -310,12 +323,7 @@ TEST(DistributedProblem, GivesTheReplicatedResidualAndJacobians) {
       const std::string what = std::to_string(spec.dim) + "D, " + partitionName(m);
       ASSERT_TRUE(share->distributed);
       EXPECT_EQ(share->globalCount, whole->disc.size()) << what;
-      const Evaluated a = evaluate(whole), b = evaluate(share);
-      ASSERT_EQ(a.owned, b.owned) << what;
-      ASSERT_TRUE(a.freeMap->isSameAs(*b.freeMap)) << what;
-      ASSERT_EQ(a.f, b.f) << what;
-      expectSameMatrix(*a.J, *b.J, what + ", full Jacobian");
-      expectSameMatrix(*a.Jn, *b.Jn, what + ", neighbour Jacobian");
+      expectSameEvaluation(whole, share, what);
     }
 }
 
@@ -366,4 +374,128 @@ TEST(DistributedProblem, ABadShareIsRefusedOnEveryRank) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("rigid-body motion"), std::string::npos) << e.what();
   }
+}
+
+namespace {
+
+/// The plate lattice of lattices() (jitter, a hole) as a particle file written by rank 0, with the
+/// things a file may hold between its particle lines: comments, blank lines, CRLF endings, a block
+/// column on some lines, long and short lines (so that the ranks' byte slices start mid-line).
+std::string writePlateFile(const std::string& name) {
+  const std::string path = name + "_" + std::to_string(comm()->getSize()) + ".txt";
+  if (comm()->getRank() == 0) {
+    const Discretization d = buildLattice(lattices()[0], false);
+    std::ofstream out(path, std::ios::binary);
+    out.precision(17);
+    out << "# plate with a hole, jittered\n\n";
+    for (int i = 0; i < d.size(); ++i) {
+      if (d.fictitious[i]) continue;
+      out << d.X[i][0] << ' ' << d.X[i][1] << " 0 " << d.volume[i];
+      if (i % 7 == 0) out << " 1";
+      if (i % 11 == 0) out << "   # a comment after the numbers";
+      out << (i % 5 == 0 ? "\r\n" : "\n");
+      if (i % 13 == 0) out << "\n  # a comment line\n";
+    }
+  }
+  comm()->barrier();
+  return path;
+}
+
+/// A geometric loading for a body without fictitious layers: the left strip clamped, the right
+/// strip pulled (u_x = 0.01 X), a body force and a modulus field varying with position.
+void loadFile(ProblemSpec& P) {
+  const Discretization& d = P.disc;
+  P.stabilization = true;
+  P.stab.G = 0.1;
+  const auto left = selectBox(d, Vec3(-1, -1, -1), Vec3(0.2, 2, 1), Population::All);
+  const auto right = selectBox(d, Vec3(2.8, -1, -1), Vec3(4, 2, 1), Population::All);
+  for (int c = 0; c < 2; ++c) prescribe(P, left, c);
+  prescribe(P, right, 0, [](const Vec3& X) { return 0.01 * X[0]; });
+  prescribe(P, right, 1);
+  P.modulusScale.resize(static_cast<std::size_t>(d.size()));
+  for (int i = 0; i < d.size(); ++i) {
+    P.modulusScale[i] = 1.0 + 0.2 * std::sin(3.0 * d.X[i][0]);
+    P.bodyForce[static_cast<std::size_t>(i) * 2 + 1] = -5.0 * (1.0 + d.X[i][0]);
+  }
+}
+
+std::shared_ptr<ProblemSpec> problemOnFile(const ParticleFileSpec& f, const MaterialSpec& mat) {
+  auto P = std::make_shared<ProblemSpec>();
+  P->disc = readParticleFile(f.path, f.dim, f.horizon, f.dx, f.thickness, false);
+  P->material = mat;
+  const std::size_t n = static_cast<std::size_t>(P->disc.size());
+  P->fixedMask.assign(n, 0);
+  P->prescribed.assign(2 * n, 0.0);
+  P->bodyForce.assign(2 * n, 0.0);
+  return P;
+}
+
+/// The message of fn's std::runtime_error ("" if it returns).
+template <class Fn>
+std::string refusal(Fn&& fn) {
+  try {
+    fn();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// A particle file read distributed (each rank parses the lines that start in its slice of the
+// bytes) gives the problem of the file read whole: the same owners, free-DOF map, residual and
+// Jacobians, bit for bit, with RCB and slabs.
+TEST(DistributedParticleFile, GivesTheWholeFilesResidualAndJacobians) {
+  const ParticleFileSpec f{writePlateFile("partition_plate"), 2, 3.015 * 0.05, 0.05, 1.0};
+  const MaterialSpec mat{MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1000.0, 0.3};
+  for (PartitionMethod m : {PartitionMethod::Rcb, PartitionMethod::Slabs}) {
+    auto whole = problemOnFile(f, mat);
+    whole->partition = m;
+    loadFile(*whole);
+    auto share = problemOnLocalParticleFile(comm(), f, mat, m);
+    loadFile(*share);
+    const std::string what = partitionName(m);
+    ASSERT_TRUE(share->distributed);
+    EXPECT_EQ(share->globalCount, whole->disc.size()) << what;
+    EXPECT_EQ(share->disc.boxLower, whole->disc.boxLower) << what;
+    EXPECT_EQ(share->disc.boxUpper, whole->disc.boxUpper) << what;
+    expectSameEvaluation(whole, share, what);
+    // RCB cuts the 3 x 1 plate across its length; id slabs cut it along (rows), two horizons deep.
+    if (comm()->getSize() > 1 && m == PartitionMethod::Rcb) EXPECT_LT(share->disc.size(), share->globalCount * 3 / 4) << what;
+  }
+}
+
+// A malformed line is refused on every rank, whichever rank's slice holds it, with the message of
+// the whole-file read (the file and the same line number); so is a file without particles.
+TEST(DistributedParticleFile, ABadLineIsRefusedOnEveryRankWithItsLineNumber) {
+  const std::string good = writePlateFile("partition_bad");
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(good, std::ios::binary);
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+  }
+  const MaterialSpec mat{MaterialKind::Hencky, 2, PlanarMode::PlaneStrain, 1000.0, 0.3};
+  const std::size_t count = lines.size();
+  for (std::size_t bad : {std::size_t{2}, count / 3, count / 2, count - 1}) {
+    const std::string path = "partition_bad_line_" + std::to_string(comm()->getSize()) + ".txt";
+    if (comm()->getRank() == 0) {
+      std::ofstream out(path, std::ios::binary);
+      for (std::size_t k = 0; k < count; ++k) out << (k == bad ? "0.5 0.5 0 nan-ish" : lines[k]) << '\n';
+    }
+    comm()->barrier();
+    const ParticleFileSpec f{path, 2, 3.015 * 0.05, 0.05, 1.0};
+    const std::string expected = refusal([&] { readParticleFile(f.path, 2, f.horizon, f.dx, f.thickness, false); });
+    ASSERT_NE(expected.find(":" + std::to_string(bad + 1) + ":"), std::string::npos) << expected;
+    EXPECT_EQ(refusal([&] { problemOnLocalParticleFile(comm(), f, mat); }), expected) << "line " << bad + 1;
+  }
+  const std::string empty = "partition_empty_" + std::to_string(comm()->getSize()) + ".txt";
+  if (comm()->getRank() == 0) std::ofstream(empty) << "# nothing\n\n# but comments\n";
+  comm()->barrier();
+  const ParticleFileSpec f{empty, 2, 3.015 * 0.05, 0.05, 1.0};
+  const std::string expected = refusal([&] { readParticleFile(f.path, 2, f.horizon, f.dx, f.thickness, false); });
+  ASSERT_NE(expected.find("no particles in file"), std::string::npos) << expected;
+  EXPECT_EQ(refusal([&] { problemOnLocalParticleFile(comm(), f, mat); }), expected);
+  const ParticleFileSpec missing{"partition_no_such_file.txt", 2, 3.015 * 0.05, 0.05, 1.0};
+  EXPECT_NE(refusal([&] { problemOnLocalParticleFile(comm(), missing, mat); }).find("cannot open"), std::string::npos);
 }

@@ -65,6 +65,15 @@ def main():
         scene = f.read()
     with open(os.path.join(out, "particle_file_nul.xml"), "w", encoding="utf-8") as f:
         f.write(edited(scene, 'value="tension_block_particles.txt"', 'value="nul_particles.txt"'))
+    # The same particles with a token that is not a number in line 200 (in the last rank's slice of
+    # the file when 3 ranks read it distributed), and the scene that reads them.
+    with open(os.path.join(src, "scenes", "tension_block_particles.txt"), "rb") as f:
+        lines = f.read().split(b"\n")
+    lines[199] = lines[199].replace(b" ", b" 1.0x ", 1)
+    with open(os.path.join(out, "late_garbage_particles.txt"), "wb") as f:
+        f.write(b"\n".join(lines))
+    with open(os.path.join(out, "particle_file_late_garbage.xml"), "w", encoding="utf-8") as f:
+        f.write(edited(scene, 'value="tension_block_particles.txt"', 'value="late_garbage_particles.txt"'))
     # Presets: a good one and one that is not XML.
     presets = os.path.join(out, "xml", "solvers")
     os.makedirs(presets, exist_ok=True)

@@ -36,10 +36,8 @@ std::string num(double v) {
   return os.str();
 }
 
-}  // namespace
-
-Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
-                                double thickness, bool families) {
+/// d without particles, its scalars checked.
+Discretization emptyParticleSet(const std::string& path, int dim, double horizon, double dx, double thickness) {
   if (dim < 1 || dim > 3)
     fail(path, 0, "dimension must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
   if (!(horizon > 0.0) || !std::isfinite(horizon))
@@ -48,64 +46,135 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
     fail(path, 0, "nominal spacing dx must be positive and finite (got " + num(dx) + ")");
   if (!(thickness > 0.0) || !std::isfinite(thickness))
     fail(path, 0, "thickness must be positive and finite (got " + num(thickness) + ")");
-
-  std::ifstream in(path);
-  if (!in) fail(path, 0, "cannot open particle file for reading");
-
   Discretization d;
   d.dim = dim;
   d.dx = dx;
   d.horizon = horizon;
   d.thickness = thickness;
+  return d;
+}
 
-  std::string text, tok;
-  long lineNo = 0;
-  while (std::getline(in, text)) {
-    ++lineNo;
-    if (text.find('\0') != std::string::npos) fail(path, lineNo, "contains a NUL byte (a particle file is text)");
-    const std::size_t hash = text.find('#');
-    if (hash != std::string::npos) text.erase(hash);
-    std::istringstream ls(text);
-    double v[5];
-    int n = 0;
-    while (ls >> tok) {
-      if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
-      if (!parseDouble(tok, v[n]))
-        fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected \"x y z volume [block]\")");
-      if (!std::isfinite(v[n])) fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
-      ++n;
-    }
-    if (n == 0) continue;  // blank or comment-only line
-    if (n < 4)
-      fail(path, lineNo, "expected at least 4 numbers \"x y z volume [block]\", found " +
-                             std::to_string(n));
-    if (!(v[3] > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(v[3]) + ")");
-    int blk = 1;
-    if (n == 5) {
-      // Accept "2" and "2.0" but not "2.5": block ids are integers.
-      if (v[4] != std::floor(v[4]) || std::abs(v[4]) > INT_MAX)
-        fail(path, lineNo, "block id must be an integer (got " + num(v[4]) + ")");
-      blk = static_cast<int>(v[4]);
-    }
-    Vec3 x = Vec3::Zero();  // unused axes are present in the file but forced to 0
-    for (int a = 0; a < dim; ++a) x[a] = v[a];
-    d.X.push_back(x);
-    d.volume.push_back(v[3]);
-    d.block.push_back(blk);
+/// Appends the particle of one line (number lineNo) to d, if the line holds one.
+void parseLine(const std::string& path, long lineNo, std::string text, Discretization& d) {
+  if (text.find('\0') != std::string::npos) fail(path, lineNo, "contains a NUL byte (a particle file is text)");
+  const std::size_t hash = text.find('#');
+  if (hash != std::string::npos) text.erase(hash);
+  std::istringstream ls(text);
+  std::string tok;
+  double v[5];
+  int n = 0;
+  while (ls >> tok) {
+    if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
+    if (!parseDouble(tok, v[n]))
+      fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected \"x y z volume [block]\")");
+    if (!std::isfinite(v[n])) fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
+    ++n;
   }
-  if (in.bad()) fail(path, lineNo, "read error");
-  if (d.X.empty()) fail(path, lineNo, "no particles in file");
+  if (n == 0) return;  // blank or comment-only line
+  if (n < 4)
+    fail(path, lineNo, "expected at least 4 numbers \"x y z volume [block]\", found " + std::to_string(n));
+  if (!(v[3] > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(v[3]) + ")");
+  int blk = 1;
+  if (n == 5) {
+    // Accept "2" and "2.0" but not "2.5": block ids are integers.
+    if (v[4] != std::floor(v[4]) || std::abs(v[4]) > INT_MAX)
+      fail(path, lineNo, "block id must be an integer (got " + num(v[4]) + ")");
+    blk = static_cast<int>(v[4]);
+  }
+  Vec3 x = Vec3::Zero();  // unused axes are present in the file but forced to 0
+  for (int a = 0; a < d.dim; ++a) x[a] = v[a];
+  d.X.push_back(x);
+  d.volume.push_back(v[3]);
+  d.block.push_back(blk);
+}
 
+/// The per-particle flags (a file has no fictitious particles and no lattice sides) and the box
+/// of the particles read.
+void finish(Discretization& d) {
   const std::size_t n = d.X.size();
   d.fictitious.assign(n, 0);
   d.sideMask.assign(n, 0);
+  if (n == 0) return;
   d.boxLower = d.X[0];
   d.boxUpper = d.X[0];
   for (const Vec3& x : d.X) {
     d.boxLower = d.boxLower.cwiseMin(x);
     d.boxUpper = d.boxUpper.cwiseMax(x);
   }
+}
+
+std::ifstream openParticleFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, 0, "cannot open particle file for reading");
+  return in;
+}
+
+}  // namespace
+
+Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
+                                double thickness, bool families) {
+  Discretization d = emptyParticleSet(path, dim, horizon, dx, thickness);
+  std::ifstream in = openParticleFile(path);
+  std::string text;
+  long lineNo = 0;
+  while (std::getline(in, text)) parseLine(path, ++lineNo, text, d);
+  if (in.bad()) fail(path, lineNo, "read error");
+  if (d.X.empty()) fail(path, lineNo, "no particles in file");
+  finish(d);
   if (families) buildFamilies(d);
+  return d;
+}
+
+std::uint64_t particleFileSize(const std::string& path) {
+  std::ifstream in = openParticleFile(path);
+  in.seekg(0, std::ios::end);
+  const auto size = in.tellg();
+  if (size < 0) fail(path, 0, "cannot tell the particle file's size");
+  return static_cast<std::uint64_t>(size);
+}
+
+long particleFileNewlines(const std::string& path, std::uint64_t begin, std::uint64_t end) {
+  std::ifstream in = openParticleFile(path);
+  in.seekg(static_cast<std::streamoff>(begin));
+  std::string chunk(static_cast<std::size_t>(end - begin), '\0');
+  in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+  if (in.gcount() != static_cast<std::streamsize>(chunk.size())) fail(path, 0, "read error");
+  long count = 0;
+  for (char c : chunk) count += c == '\n';
+  return count;
+}
+
+Discretization readParticleFileRange(const std::string& path, int dim, double horizon, double dx, double thickness,
+                                     std::uint64_t begin, std::uint64_t end, long newlinesBefore, long* lastLine) {
+  Discretization d = emptyParticleSet(path, dim, horizon, dx, thickness);
+  if (lastLine) *lastLine = 0;
+  if (begin >= end) {
+    finish(d);
+    return d;
+  }
+  std::ifstream in = openParticleFile(path);
+  long lineNo = newlinesBefore + 1;  // the line holding byte `begin`
+  std::uint64_t at = begin;
+  if (begin > 0) {
+    // The line holding byte `begin` belongs to this range only if it starts there.
+    in.seekg(static_cast<std::streamoff>(begin - 1));
+    char previous = '\0';
+    in.get(previous);
+    if (previous != '\n') {
+      std::string rest;
+      std::getline(in, rest);
+      at += rest.size() + 1;
+      ++lineNo;
+    }
+  }
+  std::string text;
+  while (at < end && std::getline(in, text)) {
+    at += text.size() + 1;
+    if (lastLine) *lastLine = lineNo;
+    parseLine(path, lineNo++, text, d);
+  }
+  if (in.bad()) fail(path, lineNo, "read error");
+  finish(d);
   return d;
 }
 

@@ -1,6 +1,7 @@
 // Zoltan2 behind perinox's partition choice, and the distributed lattice construction (the only
 // translation unit with Zoltan2's headers).
 #include "perinox/evaluator/Partitioner.hpp"
+#include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/Problem.hpp"
 
 #include <Teuchos_CommHelpers.hpp>
@@ -10,6 +11,7 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -181,9 +183,29 @@ Share receiveSorted(const Teuchos::Comm<int>& comm, const Discretization& like, 
   return s;
 }
 
-/// 1-2: this rank's slab of lattice sites generated (ids and the jitter's random stream continued
-/// by prefix sums of the slabs' counts), sent to the id slabs (so that Zoltan2 sees what
-/// ownedParticles gives it and cuts the same parts), then to the parts. n: the lattice's size.
+/// 2: particles numbered from firstId (this rank's consecutive part of the ids), sent to their id
+/// slabs (so that Zoltan2 sees what ownedParticles gives it and cuts the same parts), then to
+/// their parts. n: the body's particle count; `like`'s scalars (box included) are the body's.
+Share partitioned(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Discretization& part, long long firstId,
+                  long long n, PartitionMethod method) {
+  const int ranks = comm->getSize();
+  std::vector<double> recs;
+  std::vector<int> to;
+  for (std::size_t i = 0; i < part.X.size(); ++i) {
+    const long long id = firstId + static_cast<long long>(i);
+    pack(recs, id, part, i);
+    to.push_back(slabOf(id, n, ranks));
+  }
+  Share share = receiveSorted(*comm, part, recs, to);
+  if (method == PartitionMethod::Slabs || ranks == 1) return share;
+  const std::vector<int> parts = geometricParts(comm, part.dim, share.ids, share.d.X, method, ranks);
+  recs.clear();
+  for (std::size_t i = 0; i < share.ids.size(); ++i) pack(recs, share.ids[i], share.d, i);
+  return receiveSorted(*comm, part, recs, parts);
+}
+
+/// 1-2 for a lattice: this rank's slab of lattice sites generated (ids and the jitter's random
+/// stream continued by prefix sums of the slabs' counts), then partitioned. n: the lattice's size.
 Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const LatticeSpec& spec, PartitionMethod method,
                  long long& n) {
   const int ranks = comm->getSize(), rank = comm->getRank();
@@ -197,20 +219,65 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Latti
   MPI_Allreduce(counts, total, 2, MPI_LONG_LONG, MPI_SUM, mc);
   if (total[1] == 0) throw std::invalid_argument("no real particle left in the lattice after cutting the holes");
   n = total[0];
-  const Discretization slab = latticeSites(spec, first, last, before[1]);
-  std::vector<double> recs;
-  std::vector<int> to;
-  for (std::size_t i = 0; i < slab.X.size(); ++i) {
-    const long long id = before[0] + static_cast<long long>(i);
-    pack(recs, id, slab, i);
-    to.push_back(slabOf(id, n, ranks));
+  return partitioned(comm, latticeSites(spec, first, last, before[1]), before[0], n, method);
+}
+
+/// Runs `step` on every rank and agrees on its failure: a std::runtime_error on any rank (a
+/// malformed line in one rank's part of a file) is thrown on every rank, with the lowest failing
+/// rank's message, before the next collective.
+template <class Step>
+void agreedStep(const Teuchos::Comm<int>& comm, Step&& step) {
+  std::string error;
+  try {
+    step();
+  } catch (const std::runtime_error& e) {
+    error = e.what();
+    if (error.empty()) error = "unknown error";
   }
-  Share share = receiveSorted(*comm, slab, recs, to);
-  if (method == PartitionMethod::Slabs || ranks == 1) return share;
-  const std::vector<int> part = geometricParts(comm, spec.dim, share.ids, share.d.X, method, ranks);
-  recs.clear();
-  for (std::size_t i = 0; i < share.ids.size(); ++i) pack(recs, share.ids[i], share.d, i);
-  return receiveSorted(*comm, slab, recs, part);
+  error = lowestRankMessage(comm, error);
+  if (!error.empty()) throw std::runtime_error(error);
+}
+
+/// 1-2 for a particle file: each rank reads the lines that start in its slice of the file's
+/// bytes (the ids follow the file's order, by prefix sums of the slices' counts), then the
+/// particles are partitioned. n: the file's particle count.
+Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const ParticleFileSpec& file,
+                 PartitionMethod method, long long& n) {
+  const int ranks = comm->getSize(), rank = comm->getRank();
+  const MPI_Comm mc = rawComm(*comm);
+  std::uint64_t size = 0, begin = 0, end = 0;
+  long newlines = 0, lastLine = 0;
+  agreedStep(*comm, [&] {
+    size = particleFileSize(file.path);
+    begin = size * static_cast<std::uint64_t>(rank) / static_cast<std::uint64_t>(ranks);
+    end = size * static_cast<std::uint64_t>(rank + 1) / static_cast<std::uint64_t>(ranks);
+    newlines = particleFileNewlines(file.path, begin, end);
+  });
+  long before = 0;
+  MPI_Exscan(&newlines, &before, 1, MPI_LONG, MPI_SUM, mc);
+  if (rank == 0) before = 0;
+  Discretization part;
+  agreedStep(*comm, [&] {
+    part = readParticleFileRange(file.path, file.dim, file.horizon, file.dx, file.thickness, begin, end, before,
+                                 &lastLine);
+  });
+  long long mine = part.size(), first = 0;
+  MPI_Exscan(&mine, &first, 1, MPI_LONG_LONG, MPI_SUM, mc);
+  if (rank == 0) first = 0;
+  MPI_Allreduce(&mine, &n, 1, MPI_LONG_LONG, MPI_SUM, mc);
+  long lines = 0;
+  MPI_Allreduce(&lastLine, &lines, 1, MPI_LONG, MPI_MAX, mc);
+  if (n == 0) throw std::runtime_error(file.path + ":" + std::to_string(lines) + ": no particles in file");
+  // The body's box: the particles' bounds over every rank's part.
+  double lo[3], hi[3], bodyLo[3], bodyHi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = mine ? part.boxLower[a] : std::numeric_limits<double>::infinity();
+    hi[a] = mine ? -part.boxUpper[a] : std::numeric_limits<double>::infinity();
+  }
+  MPI_Allreduce(lo, bodyLo, 3, MPI_DOUBLE, MPI_MIN, mc);
+  MPI_Allreduce(hi, bodyHi, 3, MPI_DOUBLE, MPI_MIN, mc);
+  for (int a = 0; a < 3; ++a) part.boxLower[a] = bodyLo[a], part.boxUpper[a] = -bodyHi[a];
+  return partitioned(comm, part, first, n, method);
 }
 
 /// 3: owned + the particles other ranks own within `horizons` horizons of this rank's owned
@@ -289,19 +356,23 @@ LocalLattice buildLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& com
   return out;
 }
 
-std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
-                                                   const LatticeSpec& lattice, const MaterialSpec& material,
-                                                   PartitionMethod partition) {
+namespace {
+
+/// The distributed problem of a rank's owned share (collective): the owned particles and those
+/// within two horizons of them, loading arrays sized, nothing prescribed.
+std::shared_ptr<ProblemSpec> problemOnShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, Share owned,
+                                            long long globalCount, const MaterialSpec& material,
+                                            PartitionMethod partition) {
   auto P = std::make_shared<ProblemSpec>();
   P->distributed = true;
   P->partition = partition;
   P->material = material;
-  const Share owned = ownedShare(comm, lattice, partition, P->globalCount);
+  P->globalCount = globalCount;
   requireEveryRankOwns(*comm, owned.ids.size(), P->globalCount, partition);
-  P->owned = owned.ids;
   // Two horizons: the ghosts' families (the Jacobian graph's rows two horizons out) and the
   // cells of the lattice operator's owned nodes lie within them.
   Share near = withNeighbours(*comm, owned, 2.0);
+  P->owned = std::move(owned.ids);
   P->disc = std::move(near.d);
   P->globalId = std::move(near.ids);
   const std::size_t n = P->disc.X.size(), D = static_cast<std::size_t>(P->disc.dim);
@@ -309,6 +380,33 @@ std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuc
   P->prescribed.assign(n * D, 0.0);
   P->bodyForce.assign(n * D, 0.0);
   return P;
+}
+
+}  // namespace
+
+namespace {
+
+/// problemOnShare of the share ownedShare builds from spec (a lattice or a particle file).
+template <class Spec>
+std::shared_ptr<ProblemSpec> problemOnOwnedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Spec& spec,
+                                                 const MaterialSpec& material, PartitionMethod partition) {
+  long long n = 0;
+  Share owned = ownedShare(comm, spec, partition, n);
+  return problemOnShare(comm, std::move(owned), n, material, partition);
+}
+
+}  // namespace
+
+std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                   const LatticeSpec& lattice, const MaterialSpec& material,
+                                                   PartitionMethod partition) {
+  return problemOnOwnedShare(comm, lattice, material, partition);
+}
+
+std::shared_ptr<ProblemSpec> problemOnLocalParticleFile(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                        const ParticleFileSpec& file, const MaterialSpec& material,
+                                                        PartitionMethod partition) {
+  return problemOnOwnedShare(comm, file, material, partition);
 }
 
 }  // namespace perinox

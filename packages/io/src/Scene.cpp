@@ -381,7 +381,8 @@ void discretizationSchema(ParameterList& d) {
                              "how particles are split among MPI ranks: ");
   setChoice(d, "Construction", "Replicated",
             {{"Replicated", "every rank builds the whole discretisation (its positions, loads and regions) and keeps its particles' families"},
-             {"Distributed", "Lattice only: each rank generates and keeps only its owned particles and those within two horizons of them; "
+             {"Distributed", "Lattice and Particle File: each rank generates (a lattice) or reads from its slice of the file's bytes "
+                             "(a particle file) only its part and keeps its owned particles and those within two horizons of them; "
                              "regions, boundary conditions and loads are found rank by rank (docs/architecture.md, \"Distribution\")"}},
             "how the discretisation is built on MPI ranks: ");
 }
@@ -1231,14 +1232,14 @@ double particleHorizon(const Section& dl, double spacing, const std::string& spa
   return horizon;
 }
 
-Discretization readParticles(const SceneBuild& b, const Section& dl, double thickness) {
+/// The particle file of the scene, its keys checked.
+ParticleFileSpec particleFile(const SceneBuild& b, const Section& dl, double thickness) {
   std::string path = dl.get<std::string>("Particle File");
   if (path.empty()) fail(b.file, "'Discretization/Particle File' is required when Type = Particle File");
-  path = b.relativeToScene(path);
   const double spacing = dl.get<double>("Spacing");
   if (!(spacing > 0)) fail(b.file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
   if (dl.get<double>("Horizon") < 0) fail(b.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-  return readParticleFile(path, b.dim, particleHorizon(dl, spacing, ""), spacing, thickness, false);
+  return {b.relativeToScene(path), b.dim, particleHorizon(dl, spacing, ""), spacing, thickness};
 }
 
 Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
@@ -1266,15 +1267,17 @@ void readDiscretization(SceneBuild& b) {
   if (dtype != "Exodus" && !dl.get<std::string>("Mesh File").empty())
     fail(b.file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
   const bool distributed = dl.get<std::string>("Construction") == "Distributed";
-  if (distributed && dtype != "Lattice")
-    fail(b.file, "'Discretization/Construction' = Distributed is for lattices so far; a " + dtype +
-                     " is read whole on every rank (use Construction = Replicated)");
+  if (distributed && dtype == "Exodus")
+    fail(b.file, "'Discretization/Construction' = Distributed is for lattices and particle files so far; an Exodus mesh "
+                 "is read whole on every rank (use Construction = Replicated)");
   b.problem.partition = dl.choice<PartitionMethod>("Partition");
   try {
-    if (dtype == "Lattice" && distributed) {
-      // This rank's share only (problemOnLocalLattice): its owned particles and those within two
-      // horizons of them, with their global ids.
-      auto share = problemOnLocalLattice(b.comm, readLatticeSpec(dl, b.dim, thickness), b.problem.material, b.problem.partition);
+    if (distributed) {
+      // This rank's share only (problemOnLocalLattice, problemOnLocalParticleFile): its owned
+      // particles and those within two horizons of them, with their global ids.
+      auto share = dtype == "Lattice"
+                       ? problemOnLocalLattice(b.comm, readLatticeSpec(dl, b.dim, thickness), b.problem.material, b.problem.partition)
+                       : problemOnLocalParticleFile(b.comm, particleFile(b, dl, thickness), b.problem.material, b.problem.partition);
       ProblemSpec& P = b.problem;
       P.distributed = true;
       P.disc = std::move(share->disc);
@@ -1283,8 +1286,10 @@ void readDiscretization(SceneBuild& b) {
       P.globalCount = share->globalCount;
     } else if (dtype == "Lattice")
       b.problem.disc = buildLattice(readLatticeSpec(dl, b.dim, thickness), false);  // families: each rank finds its own
-    else if (dtype == "Particle File")
-      b.problem.disc = readParticles(b, dl, thickness);
+    else if (dtype == "Particle File") {
+      const ParticleFileSpec f = particleFile(b, dl, thickness);
+      b.problem.disc = readParticleFile(f.path, f.dim, f.horizon, f.dx, f.thickness, false);
+    }
     else
       b.problem.disc = readMesh(b, dl, thickness);
   } catch (const std::invalid_argument& e) {

@@ -87,6 +87,18 @@ Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::in
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
                                 double thickness, bool families = true);
 
+/// A particle file read in parts (one MPI rank's share of its bytes, problemOnLocalParticleFile):
+/// its size in bytes; the newlines in the bytes [begin, end); and the particles of the lines that
+/// start in [begin, end), as readParticleFile reads them (no families; the box is of these
+/// particles only). newlinesBefore: the newlines in [0, begin), so that a message names the line
+/// as readParticleFile does; lastLine, if given, receives the number of the last line read (0
+/// when none starts in the range). Throws std::runtime_error naming the file and line.
+std::uint64_t particleFileSize(const std::string& path);
+long particleFileNewlines(const std::string& path, std::uint64_t begin, std::uint64_t end);
+Discretization readParticleFileRange(const std::string& path, int dim, double horizon, double dx, double thickness,
+                                     std::uint64_t begin, std::uint64_t end, long newlinesBefore,
+                                     long* lastLine = nullptr);
+
 /// (Re)builds the families of d with a cell-list neighbour search, O(n * family size).
 void buildFamilies(Discretization& d);
 

@@ -136,6 +136,23 @@ std::shared_ptr<ProblemSpec> problemOnLocalLattice(const Teuchos::RCP<const Teuc
                                                    const LatticeSpec& lattice, const MaterialSpec& material,
                                                    PartitionMethod partition = PartitionMethod::Rcb);
 
+/// A particle file to read distributed: its path and what readParticleFile takes with it.
+struct ParticleFileSpec {
+  std::string path;
+  int dim = 2;
+  double horizon = 0.0, dx = 0.0, thickness = 1.0;
+};
+
+/// The same on this rank's share of a particle file (collective): each rank reads the lines that
+/// start in its slice of the file's bytes (particle ids in the file's order, as readParticleFile
+/// numbers them), the particles are partitioned by `partition` (the owners ownedParticles gives
+/// the whole file), and each rank keeps its owned particles and those within two horizons of
+/// them. A malformed file is refused on every rank with readParticleFile's message (the first bad
+/// line's) as std::runtime_error. Defined in Partitioner.cpp.
+std::shared_ptr<ProblemSpec> problemOnLocalParticleFile(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                        const ParticleFileSpec& file, const MaterialSpec& material,
+                                                        PartitionMethod partition = PartitionMethod::Rcb);
+
 /// The Gram matrix of the rigid-body modes (translations and rotations about the body's box
 /// centre, lengths in units of dx) restricted to the prescribed DOFs of the particles counted:
 /// all of disc, or the owned ones when distributed (sum it over the ranks).
