@@ -16,6 +16,8 @@
 #include "Agreed.hpp"
 #include "Observers.hpp"
 #include "RunOutput.hpp"
+#include "perinox/evaluator/LowestRankMessage.hpp"
+#include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/io/Output.hpp"
 
 namespace perinox {
@@ -234,25 +236,119 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
   }
 }
 
-}  // namespace
+/// A checkpoint record as it travels: kind, the particle whose owner receives it, and three values
+/// (x: DOF, X, XPREV; frozen: DOF, VALUE, 0; bond: GID_I, GID_J, 0). Ids are below 2^53 (the
+/// scene's particle limit is 5e7), so a double carries them exactly.
+constexpr int kRecord = 5;
+enum RecordKind { kX = 0, kFrozen = 1, kBond = 2 };
 
-Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles) {
-  const std::string where = "checkpoint '" + dir + "'";
-  Checkpoint c;
-  c.state = readState(dir, where);
-  checkSameScene(scene, c.state, where);
-  checkStateValues(c.state, scene, particles, where);
-  const int ranks = c.state["ranks"];
-  for (int r = 0; r < ranks; ++r) readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", *scene.problem, c, where);
-  // Every value is of a free DOF (readRankFile): with as many values as free DOFs and none twice,
-  // every free DOF has one.
+/// c's values and bonds sent to the owners of their particles (collective): first to the id slab
+/// of the particle (idSlabOf), which has learned from every rank which of its slab's particles
+/// that rank owns, then on to the owner. Returns what this rank owns.
+Checkpoint routeToOwners(const Checkpoint& c, const ProblemSpec& P, const Teuchos::Comm<int>& comm) {
+  const int ranks = comm.getSize(), D = P.dim();
+  const long long n = P.particleCount();
+  // The directory: owner of each particle of this rank's id slab.
+  const long long begin = partitionBegin(n, ranks, comm.getRank()), end = partitionBegin(n, ranks, comm.getRank() + 1);
+  std::vector<double> mine;
+  std::vector<int> to;
+  for (long long g : P.owned) {
+    mine.push_back(static_cast<double>(g));
+    mine.push_back(static_cast<double>(comm.getRank()));
+    to.push_back(idSlabOf(g, n, ranks));
+  }
+  std::vector<int> owner(static_cast<std::size_t>(end - begin), -1);
+  const std::vector<double> owners = exchangeRecords(comm, mine, 2, to);
+  for (std::size_t k = 0; k < owners.size(); k += 2) owner[static_cast<long long>(owners[k]) - begin] = static_cast<int>(owners[k + 1]);
+  std::vector<double> recs;
+  to.clear();
+  auto send = [&](RecordKind kind, long long key, double a, double b, double v) {
+    const double r[kRecord] = {static_cast<double>(kind), static_cast<double>(key), a, b, v};
+    recs.insert(recs.end(), r, r + kRecord);
+    to.push_back(idSlabOf(key, n, ranks));
+  };
+  for (std::size_t k = 0; k < c.x.size(); ++k)
+    send(kX, c.x[k].first / D, static_cast<double>(c.x[k].first), c.x[k].second, c.xPrevious[k].second);
+  for (const auto& [g, v] : c.frozen) send(kFrozen, g / D, static_cast<double>(g), v, 0.0);
+  for (const auto& [a, b] : c.broken) {
+    send(kBond, a, static_cast<double>(a), static_cast<double>(b), 0.0);
+    send(kBond, b, static_cast<double>(a), static_cast<double>(b), 0.0);
+  }
+  const std::vector<double> atSlab = exchangeRecords(comm, recs, kRecord, to);
+  to.clear();
+  for (std::size_t k = 0; k < atSlab.size(); k += kRecord) to.push_back(owner[static_cast<long long>(atSlab[k + 1]) - begin]);
+  const std::vector<double> atOwner = exchangeRecords(comm, atSlab, kRecord, to);
+  Checkpoint out;
+  for (std::size_t k = 0; k < atOwner.size(); k += kRecord) {
+    const double* r = &atOwner[k];
+    const long long a = static_cast<long long>(r[2]);
+    if (r[0] == kX) {
+      out.x.emplace_back(a, r[3]);
+      out.xPrevious.emplace_back(a, r[4]);
+    } else if (r[0] == kFrozen) {
+      out.frozen.emplace_back(a, r[3]);
+    } else {
+      out.broken.emplace_back(a, static_cast<long long>(r[3]));
+    }
+  }
+  return out;
+}
+
+/// The number of values in x, and whether any DOF has two (those of one DOF all reach one rank).
+std::pair<long long, bool> countValues(const Checkpoint& c) {
   std::vector<long long> ids;
   for (const auto& e : c.x) ids.push_back(e.first);
   std::sort(ids.begin(), ids.end());
-  const bool complete = static_cast<long long>(ids.size()) == freeDofs &&
-                        std::adjacent_find(ids.begin(), ids.end()) == ids.end();
-  if (!complete)
-    throw std::invalid_argument(where + " holds " + std::to_string(ids.size()) + " displacement values for " +
+  return {static_cast<long long>(ids.size()), std::adjacent_find(ids.begin(), ids.end()) != ids.end()};
+}
+
+}  // namespace
+
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles,
+                          const Teuchos::Comm<int>& comm) {
+  const std::string where = "checkpoint '" + dir + "'";
+  const ProblemSpec& P = *scene.problem;
+  const bool share = P.distributed && comm.getSize() > 1;
+  Checkpoint c;
+  int ranks = 0;
+  // Every rank reads state.json (the same on all, so they fail alike).
+  throwAgreed<std::invalid_argument>(comm, [&] {
+    c.state = readState(dir, where);
+    checkSameScene(scene, c.state, where);
+    checkStateValues(c.state, scene, particles, where);
+    ranks = c.state["ranks"];
+  });
+  throwAgreed<std::invalid_argument>(comm, [&] {
+    for (int r = 0; r < ranks; ++r)
+      if (!share || r % comm.getSize() == comm.getRank())
+        readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", P, c, where);
+  });
+  if (share) {
+    Checkpoint routed = routeToOwners(c, P, comm);
+    routed.state = std::move(c.state);
+    c = std::move(routed);
+    // The owner checks what its share's DOFs received: a value for a prescribed DOF is damaged.
+    throwAgreed<std::invalid_argument>(comm, [&] {
+      const int D = P.dim();
+      for (const auto* values : {&c.x, &c.frozen})
+        for (const auto& e : *values)
+          if (P.isFixed(e.first / D, static_cast<int>(e.first % D)))
+            throw std::invalid_argument(where + " holds a value for the prescribed DOF " + std::to_string(e.first) +
+                                        " (damaged or from another discretisation)");
+    });
+  }
+  // Every value is of a free DOF: with as many values as free DOFs and none twice, every free DOF
+  // has one (summed over the ranks when each holds its share).
+  auto [count, twice] = countValues(c);
+  if (share) {
+    long long total = 0;
+    int anyTwice = 0, mineTwice = twice;
+    Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, count, Teuchos::outArg(total));
+    Teuchos::reduceAll(comm, Teuchos::REDUCE_MAX, mineTwice, Teuchos::outArg(anyTwice));
+    count = total, twice = anyTwice != 0;
+  }
+  if (count != freeDofs || twice)
+    throw std::invalid_argument(where + " holds " + std::to_string(count) + " displacement values for " +
                                 std::to_string(freeDofs) + " free DOFs (damaged or from another discretisation)");
   return c;
 }

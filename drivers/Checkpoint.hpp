@@ -38,8 +38,13 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
                      const Teuchos::Comm<int>& comm);
 
 /// Reads a checkpoint written for this scene (freeDofs unknowns); throws std::invalid_argument
-/// naming the problem.
-Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles);
+/// naming the problem, on every rank. Collective. A replicated scene reads every rank file on
+/// every rank; a distributed one (Construction = Distributed) reads rank file f on rank f mod q
+/// only and sends each value and broken bond to the owners of its particles through the id-slab
+/// rendezvous, so each rank receives its share alone (owned DOFs' values, frozen DOFs, and the
+/// broken bonds with an owned end).
+Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles,
+                          const Teuchos::Comm<int>& comm);
 
 /// Checkpoints after accepted steps, every --checkpoint-steps steps and/or --checkpoint-seconds.
 class CheckpointWriter final : public StepObserver {

@@ -442,7 +442,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   res.particles = scene.problem->particleCount();
   res.dofs = evaluator->numFreeDofs();
   std::optional<Checkpoint> resume;
-  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles);
+  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles, *comm);
 
   const std::string& staging = folders.output.staging;
   StagingGuard stagingGuard{staging, rank == 0};

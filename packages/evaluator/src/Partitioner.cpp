@@ -222,22 +222,6 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Latti
   return partitioned(comm, latticeSites(spec, first, last, before[1]), before[0], n, method);
 }
 
-/// Runs `step` on every rank and agrees on its failure: a std::runtime_error on any rank (a
-/// malformed line in one rank's part of a file) is thrown on every rank, with the lowest failing
-/// rank's message, before the next collective.
-template <class Step>
-void agreedStep(const Teuchos::Comm<int>& comm, Step&& step) {
-  std::string error;
-  try {
-    step();
-  } catch (const std::runtime_error& e) {
-    error = e.what();
-    if (error.empty()) error = "unknown error";
-  }
-  error = lowestRankMessage(comm, error);
-  if (!error.empty()) throw std::runtime_error(error);
-}
-
 /// 1-2 for a particle file: each rank reads the lines that start in its slice of the file's
 /// bytes (the ids follow the file's order, by prefix sums of the slices' counts), then the
 /// particles are partitioned. n: the file's particle count.
@@ -247,7 +231,7 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Parti
   const MPI_Comm mc = rawComm(*comm);
   std::uint64_t size = 0, begin = 0, end = 0;
   long newlines = 0, lastLine = 0;
-  agreedStep(*comm, [&] {
+  throwAgreed<std::runtime_error>(*comm, [&] {
     size = particleFileSize(file.path);
     begin = size * static_cast<std::uint64_t>(rank) / static_cast<std::uint64_t>(ranks);
     end = size * static_cast<std::uint64_t>(rank + 1) / static_cast<std::uint64_t>(ranks);
@@ -257,7 +241,7 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Parti
   MPI_Exscan(&newlines, &before, 1, MPI_LONG, MPI_SUM, mc);
   if (rank == 0) before = 0;
   Discretization part;
-  agreedStep(*comm, [&] {
+  throwAgreed<std::runtime_error>(*comm, [&] {
     part = readParticleFileRange(file.path, file.dim, file.horizon, file.dx, file.thickness, begin, end, before,
                                  &lastLine);
   });
@@ -408,5 +392,12 @@ std::shared_ptr<ProblemSpec> problemOnLocalParticleFile(const Teuchos::RCP<const
                                                         PartitionMethod partition) {
   return problemOnOwnedShare(comm, file, material, partition);
 }
+
+std::vector<double> exchangeRecords(const Teuchos::Comm<int>& comm, const std::vector<double>& values, int width,
+                                    const std::vector<int>& to) {
+  return exchange(comm, values, width, to);
+}
+
+int idSlabOf(long long id, long long n, int ranks) { return slabOf(id, n, ranks); }
 
 }  // namespace perinox

@@ -23,4 +23,20 @@ inline std::string lowestRankMessage(const Teuchos::Comm<int>& comm, std::string
   return msg;
 }
 
+/// Runs f on every rank; an E (a std::exception with a sentence) thrown on any rank is thrown as E
+/// on every rank, with the lowest failing rank's sentence, once all have run f: for work that
+/// differs between ranks (each reads its part of a file) before the next collective.
+template <class E, class F>
+void throwAgreed(const Teuchos::Comm<int>& comm, F&& f) {
+  std::string msg;
+  try {
+    f();
+  } catch (const E& e) {
+    msg = e.what();
+    if (msg.empty()) msg = "unknown error";
+  }
+  msg = lowestRankMessage(comm, msg);
+  if (!msg.empty()) throw E(msg);
+}
+
 }  // namespace perinox

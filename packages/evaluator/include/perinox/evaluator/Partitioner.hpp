@@ -17,6 +17,14 @@ namespace perinox {
 std::vector<long long> ownedParticles(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Discretization& d,
                                       PartitionMethod method);
 
+/// Sends records of `width` doubles between ranks (collective): record k (values[k * width ..])
+/// goes to rank to[k]. Returns the records this rank receives, in the senders' rank order.
+std::vector<double> exchangeRecords(const Teuchos::Comm<int>& comm, const std::vector<double>& values, int width,
+                                    const std::vector<int>& to);
+/// The rank whose id slab [partitionBegin(n, ranks, q), partitionBegin(n, ranks, q + 1)) holds
+/// particle id: a rendezvous every rank can name without a table (a directory of owners by slab).
+int idSlabOf(long long id, long long n, int ranks);
+
 /// The part of every particle when d is split into `parts` parts on this process alone (for
 /// benchmarks that compare partitions for rank counts the machine cannot run, docs/performance.md).
 std::vector<int> partsOf(const Discretization& d, PartitionMethod method, int parts);
