@@ -5,8 +5,10 @@
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <mpi.h>
 
+#include <algorithm>
 #include <stdexcept>
 
+#include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/ExodusOutput.hpp"
 
@@ -22,23 +24,20 @@ const std::vector<std::string>& nodalNames() {
 }
 constexpr int kPerParticle = 10;
 
-/// Runs f on rank 0; if it throws, every rank throws the same sentence (no rank is left waiting
-/// in a collective).
+/// Runs f on the ranks that write (rank 0, or every rank when each writes its own file); if it
+/// throws anywhere, every rank throws the lowest failing rank's sentence (no rank is left
+/// waiting in a collective).
 template <class F>
-void onRankZero(const Teuchos::Comm<int>& comm, F&& f) {
+void writeAgreed(const Teuchos::Comm<int>& comm, bool writes, F&& f) {
   std::string msg;
-  if (comm.getRank() == 0) try {
+  if (writes) try {
       f();
     } catch (const std::exception& e) {
       msg = e.what();
       if (msg.empty()) msg = "unknown error";
     }
-  int length = static_cast<int>(msg.size());
-  Teuchos::broadcast(comm, 0, Teuchos::outArg(length));
-  if (length == 0) return;
-  msg.resize(length);
-  Teuchos::broadcast(comm, 0, length, msg.data());
-  throw std::runtime_error("writing the Exodus results failed: " + msg);
+  msg = lowestRankMessage(comm, msg);
+  if (!msg.empty()) throw std::runtime_error("writing the Exodus results failed: " + msg);
 }
 
 MPI_Comm rawComm(const Teuchos::Comm<int>& comm) {
@@ -60,10 +59,45 @@ ExodusRecorder::ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scen
     for (int c = 0; c < d.dim; ++c)
       globals.push_back((p.quantity == "Reaction" ? "reaction " : "displacement ") + p.name + " " + axis[c]);
   }
-  onRankZero(*ev.comm(), [&] {
-    writer_ = std::make_unique<ExodusWriter>(dir + "/fields.e", d.dim, d.thickness, d.X, d.volume, d.block, scene.regions,
-                                             nodalNames(), globals);
+  const auto& comm = *ev.comm();
+  perRank_ = ev.problem().distributed && comm.getSize() > 1;
+  if (!perRank_) {
+    writeAgreed(comm, comm.getRank() == 0, [&] {
+      writer_ = std::make_unique<ExodusWriter>(dir + "/fields.e", d.dim, d.thickness, d.X, d.volume, d.block,
+                                               scene.regions, nodalNames(), globals);
+    });
+    return;
+  }
+  // One file per rank of its owned particles (no rank holds the whole body): node and element
+  // maps of their ids, the regions' owned members as node sets.
+  const auto& owned = ev.ownedParticles();
+  std::vector<Eigen::Vector3d> X;
+  std::vector<double> volume;
+  std::vector<int> block;
+  for (long long g : owned) {
+    const int k = ev.problem().index(g);
+    X.push_back(d.X[k]);
+    volume.push_back(d.volume[k]);
+    block.push_back(d.block[k]);
+  }
+  std::map<std::string, std::vector<int>> sets;
+  for (const auto& [name, ids] : scene.regions) {
+    auto& local = sets[name];
+    for (int g : ids) {
+      const auto it = std::lower_bound(owned.begin(), owned.end(), static_cast<long long>(g));
+      if (it != owned.end() && *it == g) local.push_back(static_cast<int>(it - owned.begin()));
+    }
+    std::sort(local.begin(), local.end());
+  }
+  writeAgreed(comm, true, [&] {
+    writer_ = std::make_unique<ExodusWriter>(dir + "/" + exodusPieceName(comm.getSize(), comm.getRank()), d.dim,
+                                             d.thickness, X, volume, block, sets, nodalNames(), globals, owned);
   });
+}
+
+std::string exodusPieceName(int ranks, int rank) {
+  const std::string p = std::to_string(ranks), r = std::to_string(rank);
+  return "fields.e." + p + "." + std::string(p.size() > r.size() ? p.size() - r.size() : 0, '0') + r;
 }
 
 ExodusRecorder::~ExodusRecorder() = default;
@@ -83,6 +117,23 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
     v[3] = s(0, 0), v[4] = s(1, 1), v[5] = s(2, 2), v[6] = s(0, 1), v[7] = s(1, 2), v[8] = s(2, 0);
     v[9] = damage[i];
   }
+  std::vector<double> globals{lambda};
+  for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
+    if (scene_.probes[k].quantity == "Profile") continue;
+    const auto& hist = k < res_.probes.size() ? res_.probes[k].second : decltype(res_.probes[k].second){};
+    for (int c = 0; c < D; ++c)
+      globals.push_back(!hist.empty() && static_cast<int>(hist.back().second.size()) > c ? hist.back().second[c] : 0.0);
+  }
+  if (perRank_) {  // this rank's file: its particles in owned order
+    writeAgreed(comm, true, [&] {
+      std::vector<std::vector<double>> nodal(kPerParticle, std::vector<double>(static_cast<std::size_t>(n)));
+      for (int p = 0; p < n; ++p)
+        for (int v = 0; v < kPerParticle; ++v) nodal[v][p] = mine[static_cast<std::size_t>(p) * kPerParticle + v];
+      writer_->writeStep(lambda, nodal, globals);
+    });
+    ++steps_;
+    return;
+  }
   // Rank 0 receives every rank's values and particle ids and puts them in id order (the
   // partition decides which ids a rank owns). (MPI itself: Teuchos::gatherv has no case for
   // double in Trilinos 13.2, docs/exodus.md.)
@@ -99,14 +150,7 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
   std::vector<long long> ids(comm.getRank() == 0 ? total / kPerParticle : 0);
   MPI_Gatherv(ev_.ownedParticles().data(), n, MPI_LONG_LONG, ids.data(), counts.data(), displs.data(), MPI_LONG_LONG,
               0, raw);
-  std::vector<double> globals{lambda};
-  for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
-    if (scene_.probes[k].quantity == "Profile") continue;
-    const auto& hist = k < res_.probes.size() ? res_.probes[k].second : decltype(res_.probes[k].second){};
-    for (int c = 0; c < D; ++c)
-      globals.push_back(!hist.empty() && static_cast<int>(hist.back().second.size()) > c ? hist.back().second[c] : 0.0);
-  }
-  onRankZero(comm, [&] {
+  writeAgreed(comm, comm.getRank() == 0, [&] {
     const std::size_t np = static_cast<std::size_t>(total / kPerParticle);
     std::vector<std::vector<double>> nodal(kPerParticle, std::vector<double>(np));
     for (std::size_t p = 0; p < np; ++p)
@@ -117,7 +161,7 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
 }
 
 void ExodusRecorder::close() {
-  onRankZero(*ev_.comm(), [&] {
+  writeAgreed(*ev_.comm(), writer_ != nullptr || perRank_, [&] {
     if (writer_) writer_->close();
   });
 }

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <queue>
 #include <sstream>
 
 #include "Observers.hpp"
@@ -60,41 +61,69 @@ std::vector<double> finitePrefix(const std::vector<double>& r) {
   return {r.begin(), std::find_if(r.begin(), r.end(), [](double v) { return !std::isfinite(v); })};
 }
 
-/// The per-rank particle CSVs gathered into fields.csv (for plotting) in particle id order
-/// (a rank's particles are the partition's choice), the parts removed.
-void gatherFieldsCsv(const std::string& staging, int nranks) {
-  std::vector<std::pair<long long, std::string>> rows;
-  for (int r = 0; r < nranks; ++r) {
-    const std::string part = staging + "/fields_" + std::to_string(r) + ".csv.part";
-    std::ifstream in(part);
-    for (std::string line; std::getline(in, line);) rows.emplace_back(std::stoll(line), std::move(line));
-    in.close();
-    fs::remove(part);
-  }
-  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::ofstream all(staging + "/fields.csv");
-  all << "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage\n";
-  for (const auto& row : rows) all << row.second << '\n';
-  if (!all) throw std::runtime_error("cannot write '" + staging + "/fields.csv'");
+const char* const kFieldsHeader = "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage";
+
+/// A profile's file name part: its probe's name with spaces as underscores.
+std::string profileName(const ProbeDef& probe) {
+  std::string fname = probe.name;
+  std::replace(fname.begin(), fname.end(), ' ', '_');
+  return fname;
 }
 
-/// Profiles: the final state of every particle of a region (e.g. u_x along an axis).
-void writeProfiles(const Scene& scene, const std::string& staging) {
-  for (const auto& probe : scene.probes) {
-    if (probe.quantity != "Profile") continue;
-    std::ifstream in(staging + "/fields.csv");
-    std::ostringstream out;
-    std::string line;
-    std::getline(in, line);
-    out << line << '\n';
-    while (std::getline(in, line)) {
-      const long long id = std::stoll(line.substr(0, line.find(',')));
-      if (std::binary_search(probe.particles.begin(), probe.particles.end(), static_cast<int>(id))) out << line << '\n';
-    }
-    std::string fname = probe.name;
-    std::replace(fname.begin(), fname.end(), ' ', '_');
-    writeFileAtomic(staging + "/profile_" + fname + ".csv", out.str());
+/// Merges files of rows sorted by their leading id into `out` (under `header` unless empty), in
+/// id order, and removes them. One row of each part is held, never the whole body.
+void mergeGroup(const std::vector<std::string>& parts, const std::string& header, const std::string& out) {
+  std::vector<std::ifstream> in;
+  std::vector<std::string> row(parts.size());
+  using Head = std::pair<long long, std::size_t>;
+  std::priority_queue<Head, std::vector<Head>, std::greater<Head>> next;
+  auto advance = [&](std::size_t k) {
+    if (std::getline(in[k], row[k]) && !row[k].empty()) next.emplace(std::stoll(row[k]), k);
+  };
+  for (const auto& p : parts) in.emplace_back(p);
+  for (std::size_t k = 0; k < parts.size(); ++k) advance(k);
+  std::ofstream o(out);
+  if (!header.empty()) o << header << '\n';
+  while (!next.empty()) {
+    const std::size_t k = next.top().second;
+    next.pop();
+    o << row[k] << '\n';
+    advance(k);
   }
+  o.close();
+  if (!o) throw std::runtime_error("cannot write '" + out + "'");
+  for (std::size_t k = 0; k < parts.size(); ++k) in[k].close(), fs::remove(parts[k]);
+}
+
+/// mergeGroup for any number of parts: at most 64 files open at once (groups of 64 merged into
+/// intermediate parts first, as many rounds as needed).
+void mergeSortedParts(std::vector<std::string> parts, const std::string& header, const std::string& out) {
+  constexpr std::size_t kOpen = 64;
+  for (int round = 0; parts.size() > kOpen; ++round) {
+    std::vector<std::string> merged;
+    for (std::size_t g = 0; g < parts.size(); g += kOpen) {
+      const std::vector<std::string> group(parts.begin() + g, parts.begin() + std::min(g + kOpen, parts.size()));
+      merged.push_back(out + ".round" + std::to_string(round) + "_" + std::to_string(merged.size()) + ".part");
+      mergeGroup(group, "", merged.back());
+    }
+    parts = std::move(merged);
+  }
+  mergeGroup(parts, header, out);
+}
+
+/// The per-rank particle CSVs merged into fields.csv (for plotting) in particle id order, and
+/// each Profile probe's per-rank rows into profile_<name>.csv; the parts removed.
+void mergeFieldParts(const Scene& scene, const std::string& staging, int nranks) {
+  auto partsOf = [&](const std::string& stem) {
+    std::vector<std::string> parts;
+    for (int r = 0; r < nranks; ++r) parts.push_back(staging + "/" + stem + "_" + std::to_string(r) + ".csv.part");
+    return parts;
+  };
+  mergeSortedParts(partsOf("fields"), kFieldsHeader, staging + "/fields.csv");
+  for (const auto& probe : scene.probes)
+    if (probe.quantity == "Profile")
+      mergeSortedParts(partsOf("profile_" + profileName(probe)), kFieldsHeader,
+                       staging + "/profile_" + profileName(probe) + ".csv");
 }
 
 /// path.csv: the load factor and every probe at every converged step.
@@ -161,7 +190,7 @@ void drawPlots(const std::string& staging, const RunOptions& options) {
 }  // namespace
 
 void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x, const std::string& dir,
-                 bool vtk, int rank, int nranks) {
+                 bool vtk, int rank, int nranks, const std::vector<ProbeDef>& probes) {
   const auto& d = ev.problem().disc;
   const int D = ev.problem().dim();
   const auto u = ev.ownedDisplacements(x);
@@ -174,8 +203,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   PointField rk{"rank", 1, std::vector<double>(n, static_cast<double>(rank))};
   const bool damage = ev.problem().damage;
   PointField dmg{"damage", 1, damage ? ev.ownedDamage() : std::vector<double>(n, 0.0)};
-  std::ostringstream csv;
-  csv << std::setprecision(12);
+  std::vector<std::string> rows(n);  // this rank's fields.csv rows
   for (std::size_t i = 0; i < n; ++i) {
     const long long p = ev.ownedParticles()[i];
     const int k = ev.problem().index(p);  // its index in the discretisation (p unless distributed)
@@ -184,10 +212,13 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values[9 * i + 3 * r + c] = outs[i].cauchy(r, c);
     fict.values[i] = d.fictitious[k];
+    std::ostringstream csv;
+    csv << std::setprecision(12);
     csv << p << ',' << d.X[k][0] << ',' << d.X[k][1] << ',' << d.X[k][2] << ',' << disp.values[3 * i] << ','
         << disp.values[3 * i + 1] << ',' << disp.values[3 * i + 2] << ',' << outs[i].cauchy(0, 0) << ','
         << outs[i].cauchy(1, 1) << ',' << outs[i].cauchy(2, 2) << ',' << outs[i].cauchy(0, 1) << ','
         << static_cast<int>(d.fictitious[k]) << ',' << dmg.values[i] << '\n';
+    rows[i] = csv.str();
   }
   std::vector<PointField> fields{disp, stress, fict, rk};
   if (damage) fields.push_back(dmg);  // only where the effect is on
@@ -201,7 +232,22 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
       writePvtu(dir + "/fields.pvtu", pieces, fields);
     }
   }
-  writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", csv.str());
+  // The rows in id order (ownedParticles is sorted; the merge on rank 0 relies on it), and each
+  // Profile probe's rows of this rank's particles in the region.
+  const auto& owned = ev.ownedParticles();
+  if (!std::is_sorted(owned.begin(), owned.end())) throw std::logic_error("writeFields: the owned particles are not sorted");
+  std::string all;
+  for (const auto& r : rows) all += r;
+  writeFileAtomic(dir + "/fields_" + std::to_string(rank) + ".csv.part", all);
+  for (const auto& probe : probes) {
+    if (probe.quantity != "Profile") continue;
+    std::vector<int> members(probe.particles);
+    std::sort(members.begin(), members.end());
+    std::string part;
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::binary_search(members.begin(), members.end(), static_cast<int>(owned[i]))) part += rows[i];
+    writeFileAtomic(dir + "/profile_" + profileName(probe) + "_" + std::to_string(rank) + ".csv.part", part);
+  }
 }
 
 nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
@@ -360,8 +406,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
 
 void writeResults(const Scene& scene, const RunResult& res, const RunFacts& facts, const RunOptions& options,
                   const std::string& staging, int nranks) {
-  gatherFieldsCsv(staging, nranks);
-  writeProfiles(scene, staging);
+  mergeFieldParts(scene, staging, nranks);
   writeFileAtomic(staging + "/path.csv", pathCsv(scene, res));
   writeFileAtomic(staging + "/summary.json",
                   summaryJson(scene, res, facts).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");

@@ -29,9 +29,11 @@ struct RunFacts {
   nlohmann::json partition;        // the partition: method, owned and ghost particles per rank
 };
 
-/// This rank's particles (fields_<rank>.vtu when vtk, rank 0 the PVTU index; fields_<rank>.csv.part) into dir.
+/// This rank's particles (fields_<rank>.vtu when vtk, rank 0 the PVTU index; fields_<rank>.csv.part
+/// and, for each Profile probe, profile_<name>_<rank>.csv.part, in id order) into dir; rank 0
+/// merges the parts (writeResults) without holding the whole body.
 void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>& x, const std::string& dir,
-                 bool vtk, int rank, int nranks);
+                 bool vtk, int rank, int nranks, const std::vector<ProbeDef>& probes);
 
 /// One step's record as summary.json writes it (and a checkpoint keeps it), and back.
 nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength);

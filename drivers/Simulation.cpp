@@ -470,7 +470,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
     res.errorU = displacementError(*evaluator, scene.reference, evaluator->ownedDisplacements(x));
   }
   const bool vtu = scene.output.vtk && scene.output.format != "Exodus";
-  agreed(*comm, [&] { writeFields(*evaluator, x, staging, vtu, rank, comm->getSize()); });
+  agreed(*comm, [&] { writeFields(*evaluator, x, staging, vtu, rank, comm->getSize(), scene.probes); });
   if (exodus) {
     // Arc-length continuation (no load-stepping observers) or no accepted step: the state written.
     if (exodus->steps() == 0) exodus->record(x, solved.loadFactor);

@@ -202,6 +202,3 @@ perinox_bad_input_distributed(distributed_particle_file_nul 3 ${GEN}/particle_fi
 perinox_bad_input_distributed(distributed_particle_file_late 3 ${GEN}/particle_file_late_garbage.xml
   "late_garbage_particles.txt:200: '1.0x' is not a number")
 perinox_bad_input(particle_file_late ${GEN}/particle_file_late_garbage.xml "late_garbage_particles.txt:200: '1.0x' is not a number")
-perinox_bad_input_distributed(distributed_exodus_mesh 2 ${PROJECT_SOURCE_DIR}/tests/exodus/quad_exodus.xml
-  "'Discretization/Construction' = Distributed is for lattices and particle files so far")
-perinox_bad_input_distributed(distributed_exodus_output 2 ${TINY} "gathers the whole body on rank 0" --set "Output/Format=Exodus")

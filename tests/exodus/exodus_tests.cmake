@@ -68,6 +68,22 @@ foreach(case bar quad)
     FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_np3")
 endforeach()
 
+# Built distributed (each rank reads its range of the elements, tests/exodus/ and docs/exodus.md):
+# the same probes as the whole read on 1 rank, to 1e-10, on 1 and 3 ranks, RCB and slabs.
+foreach(case bar quad)
+  foreach(run "np1;1;RCB" "np3;3;RCB" "slabs_np3;3;Slabs")
+    list(GET run 0 tag)
+    list(GET run 1 np)
+    list(GET run 2 method)
+    perinox_exodus_run(NAME exodus_${case}_distributed_${tag} SCENE ${case}_exodus.xml NP ${np}
+      SETS "Discretization/Construction=Distributed" "Discretization/Partition=${method}" CHECK --partition ${method} --distributed)
+    add_test(NAME exodus_${case}_distributed_${tag}_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+      --rtol 1e-10 ${PERINOX_TEST_OUT}/exodus_${case}_np1 ${PERINOX_TEST_OUT}/exodus_${case}_distributed_${tag})
+    set_tests_properties(exodus_${case}_distributed_${tag}_compare PROPERTIES LABELS mpi
+      FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_distributed_${tag}")
+  endforeach()
+endforeach()
+
 # Bad meshes and mesh regions: one sentence naming the file (and block and element), exit code 2,
 # nothing written.
 function(perinox_bad_mesh name scene message)
@@ -139,6 +155,36 @@ perinox_exodus_run(NAME exodus_output_bar SCENE bar_exodus.xml NP 3 SETS "Output
 add_test(NAME exodus_output_bar_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar
   --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu)
 set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar)
+# One file per rank when built distributed on several ranks (fields.e.3.0 ... fields.e.3.2, no
+# rank holding the whole body): joined by their number maps they equal fields.csv and the probes,
+# on the two-block bar (mesh read distributed) and the cantilever (a lattice, Format = Both).
+perinox_exodus_run(NAME exodus_output_bar_distributed SCENE bar_exodus.xml NP 3
+  SETS "Output/Format=Exodus" "Discretization/Construction=Distributed")
+add_test(NAME exodus_output_bar_distributed_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar_distributed
+  --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu --pieces 3)
+set_tests_properties(exodus_output_bar_distributed_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar_distributed)
+perinox_run_test(NAME exodus_output_cantilever_distributed_np3 SCENE cantilever.xml NP 3
+  SETS "Output/Format=Both" "Solver/Load Steps=4" "Solver/Linear Solver Preset=gmres-ilu" "Discretization/Construction=Distributed"
+  CHECK --converged FIXTURE_SETUP exodus_output_cantilever_distributed_np3 LABELS unit)
+add_test(NAME exodus_output_cantilever_distributed_np3_check COMMAND check_exodus_output
+  ${PERINOX_TEST_OUT}/exodus_output_cantilever_distributed_np3 --probe tip=tip --blocks 1 --pieces 3)
+set_tests_properties(exodus_output_cantilever_distributed_np3_check PROPERTIES LABELS unit
+  FIXTURES_REQUIRED exodus_output_cantilever_distributed_np3)
+# A bad mesh read distributed is refused on every rank with the whole read's sentence (the bad
+# element lies in rank 0's range, the missing node set is found by no rank).
+function(perinox_bad_mesh_distributed name scene message)
+  perinox_bad_input_distributed(${name} 3 ${EXO_DIR}/${scene} "${message}" ${ARGN})
+  set_tests_properties(badinput_${name} PROPERTIES FIXTURES_REQUIRED exodus_meshes)
+endfunction()
+perinox_bad_mesh_distributed(distributed_exodus_inverted_hex bar_exodus.xml
+  "inverted.e: element 2 of element block 1 ('left part') ('HEX8') is inverted or degenerate" --set "${MF}=inverted.e")
+perinox_bad_mesh_distributed(distributed_exodus_missing_file bar_exodus.xml "no_such_mesh.e: cannot open the Exodus mesh"
+  --set "${MF}=no_such_mesh.e")
+perinox_bad_mesh_distributed(distributed_exodus_node_set_unknown bar_exodus.xml "region 'left': the mesh has no Node Set with name 'nope'"
+  --set "Regions/left/Name=nope")
+perinox_bad_mesh_distributed(distributed_exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e"
+  --set "Output/Format=Exodus")
+
 # Complete or absent: a bad mesh with Exodus output writes nothing.
 perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
 
@@ -220,6 +266,12 @@ foreach(np 1 3)
     --probes a1=0.425 b1=0.775 a2=1.225 b2=1.575 --strain-rtol 1e-2 --interface-rtol 1e-2 --reaction-rtol 0.1)
   set_tests_properties(blocks_exodus_bar_np${np}_closed_form PROPERTIES LABELS "unit;verification" FIXTURES_REQUIRED blocks_exodus_bar_np${np})
 endforeach()
+perinox_exodus_run(NAME blocks_exodus_bar_distributed_np3 SCENE bimaterial_bar_exodus.xml NP 3
+  SETS "Discretization/Construction=Distributed")
+add_test(NAME blocks_exodus_bar_distributed_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_distributed_np3)
+set_tests_properties(blocks_exodus_bar_distributed_compare PROPERTIES LABELS mpi
+  FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_distributed_np3")
 add_test(NAME blocks_exodus_bar_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np3)
 set_tests_properties(blocks_exodus_bar_ranks_compare PROPERTIES LABELS mpi FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_np3")

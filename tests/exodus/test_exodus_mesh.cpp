@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -190,6 +191,81 @@ TEST(ExodusMesh, RefusesBadMeshesWithOneSentence) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("cannot open the Exodus mesh"), std::string::npos) << e.what();
   }
+}
+
+/// The mesh read in `parts` element ranges (readExodusMeshRange, one process) equals the whole
+/// read: each range holds its elements' positions, volumes and blocks in file order, every block,
+/// and each set's members in its range (global element numbers); the ranges' node ranges split
+/// the nodes. The tensile test's mesh when it is here (three blocks, six node sets, elements
+/// whose nodes lie in another range's node range), else the two-block hex box.
+void expectRangesEqualWhole(const std::string& path, int dim, int parts) {
+  const ExodusMesh whole = readExodusMesh(path, dim, 1.0);
+  const perinox::ExodusMeshSize size = perinox::exodusMeshSize(path, dim);
+  ASSERT_EQ(size.elements, whole.disc.size());
+  std::vector<Vec3> X;
+  std::vector<double> V;
+  std::vector<int> B;
+  std::vector<std::vector<int>> nodeSets(whole.nodeSets.size()), sideSets(whole.sideSets.size());
+  int phases = 0;
+  for (int r = 0; r < parts; ++r) {
+    const perinox::ExodusRange range{size.elements * r / parts, size.elements * (r + 1) / parts, size.nodes * r / parts,
+                                     size.nodes * (r + 1) / parts};
+    const ExodusMesh part = perinox::readExodusMeshRange(path, dim, 1.0, range, [&](const std::function<void()>& f) {
+      ++phases;
+      f();
+    });
+    ASSERT_EQ(part.disc.size(), range.elementEnd - range.elementBegin);
+    ASSERT_EQ(part.blocks.size(), whole.blocks.size());
+    X.insert(X.end(), part.disc.X.begin(), part.disc.X.end());
+    V.insert(V.end(), part.disc.volume.begin(), part.disc.volume.end());
+    B.insert(B.end(), part.disc.block.begin(), part.disc.block.end());
+    ASSERT_EQ(part.nodeSets.size(), whole.nodeSets.size());
+    ASSERT_EQ(part.sideSets.size(), whole.sideSets.size());
+    for (std::size_t s = 0; s < nodeSets.size(); ++s)
+      for (int q : part.nodeSets[s].particles) {
+        EXPECT_TRUE(q >= range.elementBegin && q < range.elementEnd) << "set " << s << " member " << q;
+        nodeSets[s].push_back(q);
+      }
+    for (std::size_t s = 0; s < sideSets.size(); ++s)
+      sideSets[s].insert(sideSets[s].end(), part.sideSets[s].particles.begin(), part.sideSets[s].particles.end());
+  }
+  EXPECT_EQ(phases, 3 * parts);  // header, elements, sets: each through the caller's phase
+  ASSERT_EQ(static_cast<int>(X.size()), whole.disc.size());
+  for (int p = 0; p < whole.disc.size(); ++p) {
+    EXPECT_EQ(X[p], whole.disc.X[p]) << "particle " << p;  // the same arithmetic: bit for bit
+    EXPECT_EQ(V[p], whole.disc.volume[p]) << "particle " << p;
+    EXPECT_EQ(B[p], whole.disc.block[p]) << "particle " << p;
+  }
+  for (std::size_t s = 0; s < nodeSets.size(); ++s) EXPECT_EQ(nodeSets[s], whole.nodeSets[s].particles) << "node set " << s;
+  for (std::size_t s = 0; s < sideSets.size(); ++s) EXPECT_EQ(sideSets[s], whole.sideSets[s].particles) << "side set " << s;
+}
+
+TEST(ExodusMesh, RangesReadPieceByPieceEqualTheWholeRead) {
+  const std::string path = tmp("ranges.e");
+  exotest::write(path, exotest::hexBox(6, 3, 2, 0.5, 3));
+  for (int parts : {1, 2, 3, 5, 36}) expectRangesEqualWhole(path, 3, parts);
+  std::remove(path.c_str());
+#ifdef PERINOX_TENSILE_DIR
+  for (int parts : {2, 7}) expectRangesEqualWhole(std::string(PERINOX_TENSILE_DIR) + "/tensile_test.g", 3, parts);
+#endif
+}
+
+// A bad coordinate is found by the range whose node range holds it, a bad element by the range
+// holding the element: each with the whole read's sentence.
+TEST(ExodusMesh, ARangeRefusesWhatTheWholeReadRefuses) {
+  const std::string path = tmp("ranges_inverted.e");
+  exotest::write(path, exotest::invertedHex());
+  const perinox::ExodusMeshSize size = perinox::exodusMeshSize(path, 3);
+  ASSERT_EQ(size.elements, 2);
+  auto identity = [](const std::function<void()>& f) { f(); };
+  EXPECT_NO_THROW(perinox::readExodusMeshRange(path, 3, 1.0, {0, 1, 0, size.nodes}, identity));
+  try {
+    perinox::readExodusMeshRange(path, 3, 1.0, {1, 2, 0, 0}, identity);
+    ADD_FAILURE() << "the inverted element was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("element 2 of element block 1"), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
 }
 
 #ifdef PERINOX_TENSILE_DIR

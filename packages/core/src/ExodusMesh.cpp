@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -24,6 +25,10 @@ bool exodusAvailable() {
 #else
   return false;
 #endif
+}
+
+double meshSpacing(const Discretization& d, double medianVolume) {
+  return d.dim == 3 ? std::cbrt(medianVolume) : std::sqrt(medianVolume / d.thickness);
 }
 
 #ifdef PERINOX_HAVE_EXODUS
@@ -235,11 +240,9 @@ void checkNetcdf(const std::string& path) {
   if (!cdf && !hdf) fail(path, "is not an Exodus II file (not a netCDF file)");
 }
 
-/// The mesh's header and node coordinates (2D scenes: z = 0).
+/// The mesh's header.
 struct MeshHeader {
   int numDim = 0, numNodes = 0, numElem = 0, numBlocks = 0, numNodeSets = 0, numSideSets = 0;
-  std::vector<double> cx, cy, cz;
-  Vec3 node(int n) const { return Vec3(cx[n - 1], cy[n - 1], cz[n - 1]); }  // 1-based node number
 };
 
 MeshHeader readHeader(int exo, const std::string& path, int dim) {
@@ -251,17 +254,25 @@ MeshHeader readHeader(int exo, const std::string& path, int dim) {
   if (h.numElem <= 0) fail(path, "has no elements");
   if (h.numDim < 2 || h.numDim > 3) fail(path, "has " + std::to_string(h.numDim) + "-dimensional coordinates (2 or 3 are read)");
   if (dim == 3 && h.numDim < 3) fail(path, "is a 2D mesh but the scene is 3D ('Discretization/Dimension' = 3)");
-  h.cx.assign(h.numNodes, 0.0);
-  h.cy.assign(h.numNodes, 0.0);
-  h.cz.assign(h.numNodes, 0.0);
-  if (h.numNodes > 0 && ex_get_coord(exo, h.cx.data(), h.cy.data(), h.numDim == 3 ? h.cz.data() : nullptr) < 0)
-    fail(path, "has unreadable node coordinates");
-  for (int i = 0; i < h.numNodes; ++i)
-    if (!std::isfinite(h.cx[i]) || !std::isfinite(h.cy[i]) || !std::isfinite(h.cz[i]))
-      fail(path, "node " + std::to_string(i + 1) + " has a coordinate that is not a finite number");
-  if (dim == 2)
-    for (double& z : h.cz) z = 0;  // 2D: the x-y plane (as particle files do)
   return h;
+}
+
+/// Entries read per library call when a list (coordinates, a set) is read in pieces: a rank holds
+/// at most this many of a list it does not keep.
+constexpr long long kChunk = 1 << 16;
+
+/// Calls f(node, x) for the nodes [first, first + count) (0-based), read in pieces; x has the
+/// file's z (0 for 2D meshes).
+template <class F>
+void forNodes(int exo, const std::string& path, const MeshHeader& h, long long first, long long count, F&& f) {
+  std::vector<double> x, y, z;
+  for (long long a = first; a < first + count; a += kChunk) {
+    const long long m = std::min(kChunk, first + count - a);
+    x.assign(m, 0.0), y.assign(m, 0.0), z.assign(m, 0.0);
+    if (ex_get_partial_coord(exo, a + 1, m, x.data(), y.data(), h.numDim == 3 ? z.data() : nullptr) < 0)
+      fail(path, "has unreadable node coordinates");
+    for (long long k = 0; k < m; ++k) f(a + k, Vec3(x[k], y[k], z[k]));
+  }
 }
 
 /// One block's element type and size, checked against the scene's dimension.
@@ -287,7 +298,48 @@ BlockLayout readBlockLayout(int exo, const std::string& path, int dim, MeshBlock
     fail(path, where + " has 2D elements ('" + blk.elementType + "') but the scene is 3D ('Discretization/Dimension' = 3)");
   if (dim == 2 && threeD(L.shape))
     fail(path, where + " has 3D elements ('" + blk.elementType + "') but the scene is 2D ('Discretization/Dimension' = 2)");
+  if (L.shape == Shape::Sphere && L.attrs < 2)  // Peridigm's rule: attribute 1 the radius, 2 the volume
+    fail(path, where + " has sphere elements with " + std::to_string(L.attrs) +
+                   " attribute(s); the volume is read from the second attribute (radius, volume)");
   return L;
+}
+
+/// An open mesh: its header and its element blocks (names, types, sizes), checked.
+struct OpenMesh {
+  ExodusFile file;
+  MeshHeader h;
+  std::vector<MeshBlock> blocks;
+  std::vector<BlockLayout> layouts;
+  long long elements = 0;  // over the blocks: the particles
+};
+
+void openMesh(const std::string& path, int dim, OpenMesh& m) {
+  if (dim != 2 && dim != 3) fail(path, "Exodus meshes are for 2D and 3D scenes ('Discretization/Dimension' = 2 or 3)");
+  checkNetcdf(path);
+  ex_opts(0);  // no messages on stderr and no abort: every failure becomes this reader's sentence
+  int cpuWordSize = sizeof(double), ioWordSize = 0;
+  float version = 0;
+  m.file.id = ex_open(path.c_str(), EX_READ, &cpuWordSize, &ioWordSize, &version);
+  if (m.file.id < 0) fail(path, "is not an Exodus II file (the Exodus library cannot open it)");
+  const int exo = m.file.id;
+  // Names longer than Exodus' default 32 characters come back whole only when asked for.
+  const int usedNameLength = static_cast<int>(ex_inquire_int(exo, EX_INQ_DB_MAX_USED_NAME_LENGTH));
+  if (usedNameLength > MAX_STR_LENGTH) ex_set_max_name_length(exo, std::min(usedNameLength, 256));
+  m.h = readHeader(exo, path, dim);
+  std::vector<int> blockIds(m.h.numBlocks);
+  if (ex_get_elem_blk_ids(exo, blockIds.data()) < 0) fail(path, "has unreadable element block ids");
+  for (int id : blockIds) {
+    MeshBlock blk;
+    blk.id = id;
+    blk.name = entityName(exo, EX_ELEM_BLOCK, id);
+    if (blk.name.empty()) blk.name = "block_" + std::to_string(id);  // Peridigm's name for an unnamed block
+    for (const MeshBlock& other : m.blocks)
+      if (other.id == id) fail(path, "has two element blocks with id " + std::to_string(id));
+    m.layouts.push_back(readBlockLayout(exo, path, dim, blk));
+    m.elements += m.layouts.back().count;
+    m.blocks.push_back(blk);
+  }
+  if (m.elements == 0) fail(path, "has no elements in its element blocks");
 }
 
 /// Centroid and volume of one element from its corners (sphere: the node and the volume
@@ -316,62 +368,102 @@ Measure elementMeasure(const std::string& path, const std::string& element, cons
   return m;
 }
 
-/// Reads one element block into particles (appended to mesh.disc, numbered from elem on) and
-/// records for every node the elements that touch it (for the node sets).
-void readBlock(int exo, const std::string& path, const MeshHeader& h, int blockId, double thickness, ExodusMesh& mesh,
-               std::vector<std::vector<int>>& elementsOfNode, int& elem) {
-  Discretization& d = mesh.disc;
-  MeshBlock blk;
-  blk.id = blockId;
-  blk.name = entityName(exo, EX_ELEM_BLOCK, blk.id);
-  if (blk.name.empty()) blk.name = "block_" + std::to_string(blk.id);  // Peridigm's name for an unnamed block
-  const BlockLayout L = readBlockLayout(exo, path, d.dim, blk);
-  const std::string where = blockLabel(blk.id, blk.name);
-  std::vector<int> conn(static_cast<std::size_t>(L.count) * L.nodesPer);
-  if (L.count > 0 && ex_get_elem_conn(exo, blk.id, conn.data()) < 0) fail(path, "has unreadable connectivity in " + where);
-  std::vector<double> attr;
-  if (L.shape == Shape::Sphere) {
-    // Peridigm's rule: attribute 1 is the sphere's radius, attribute 2 its volume.
-    if (L.attrs < 2)
-      fail(path, where + " has sphere elements with " + std::to_string(L.attrs) +
-                     " attribute(s); the volume is read from the second attribute (radius, volume)");
-    attr.resize(static_cast<std::size_t>(L.count) * L.attrs);
-    if (ex_get_elem_attr(exo, blk.id, attr.data()) < 0) fail(path, "has unreadable sphere attributes in " + where);
-  }
-  for (int e = 0; e < L.count; ++e, ++elem) {
-    const std::string element = "element " + std::to_string(elem + 1) + " of " + where;
-    std::array<Vec3, 8> x;
-    for (int a = 0; a < L.nodesPer; ++a) {
-      const int node = conn[static_cast<std::size_t>(e) * L.nodesPer + a];
-      if (node < 1 || node > h.numNodes)
-        fail(path, element + " names node " + std::to_string(node) + ", but the mesh has " + std::to_string(h.numNodes) + " nodes");
-      if (a < L.corners) x[a] = h.node(node);
-      auto& list = elementsOfNode[node - 1];
-      if (list.empty() || list.back() != elem) list.push_back(elem);
-    }
-    const double sphereVolume = L.shape == Shape::Sphere ? attr[static_cast<std::size_t>(e) * L.attrs + 1] : 0.0;
-    Measure m = elementMeasure(path, element, blk.elementType, L.shape, x, sphereVolume);
-    if (L.shape == Shape::Quad || L.shape == Shape::Tri) m.volume *= thickness;
-    if (d.dim == 2) m.centroid[2] = 0;
-    d.X.push_back(m.centroid);
-    d.volume.push_back(m.volume);
-    d.block.push_back(blk.id);
-  }
-  mesh.blocks.push_back(blk);
-}
-
 /// Sorted, without repeats.
 void uniqueSorted(std::vector<int>& v) {
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());
 }
 
-/// Node sets: the particles of the elements touching the set's nodes (Peridigm's rule).
-void readNodeSets(int exo, const std::string& path, const MeshHeader& h, const std::vector<std::vector<int>>& elementsOfNode,
-                  ExodusMesh& mesh) {
+/// One block's elements in the range: their connectivity (and sphere attributes).
+struct BlockSlice {
+  std::size_t block = 0;   // index in OpenMesh::blocks
+  long long first = 0;     // global number (0-based) of the slice's first element
+  long long blockFirst = 0;  // ... and of the block's first element
+  int count = 0;
+  std::vector<int> conn;
+  std::vector<double> attr;
+};
+
+/// Reads the elements [begin, end) (file order, block after block) into particles, appended to
+/// mesh.disc in that order; for every node they touch, the pairs (node, local particle) sorted
+/// (for the node sets). The coordinates of the nodes they name are read in pieces.
+void readElements(const OpenMesh& m, const std::string& path, double thickness, long long begin, long long end,
+                  ExodusMesh& mesh, std::vector<std::pair<int, int>>& elementsOfNode) {
+  const int exo = m.file.id;
+  Discretization& d = mesh.disc;
+  std::vector<BlockSlice> slices;
+  long long start = 0;
+  for (std::size_t b = 0; b < m.blocks.size(); start += m.layouts[b].count, ++b) {
+    const BlockLayout& L = m.layouts[b];
+    const long long lo = std::max(start, begin), hi = std::min(start + L.count, end);
+    if (lo >= hi) continue;
+    BlockSlice s;
+    s.block = b, s.first = lo, s.blockFirst = start, s.count = static_cast<int>(hi - lo);
+    const std::string where = blockLabel(m.blocks[b].id, m.blocks[b].name);
+    s.conn.resize(static_cast<std::size_t>(s.count) * L.nodesPer);
+    if (ex_get_partial_conn(exo, EX_ELEM_BLOCK, m.blocks[b].id, lo - start + 1, s.count, s.conn.data(), nullptr, nullptr) < 0)
+      fail(path, "has unreadable connectivity in " + where);
+    if (L.shape == Shape::Sphere) {
+      s.attr.resize(static_cast<std::size_t>(s.count) * L.attrs);
+      if (ex_get_partial_attr(exo, EX_ELEM_BLOCK, m.blocks[b].id, lo - start + 1, s.count, s.attr.data()) < 0)
+        fail(path, "has unreadable sphere attributes in " + where);
+    }
+    slices.push_back(std::move(s));
+  }
+  // The corners' coordinates: the nodes named, read in pieces of at most kChunk consecutive
+  // numbers around them.
+  std::vector<int> needed;
+  for (const BlockSlice& s : slices)
+    for (int node : s.conn)
+      if (node >= 1 && node <= m.h.numNodes) needed.push_back(node);
+  uniqueSorted(needed);
+  std::vector<Vec3> coords(needed.size());
+  for (std::size_t i = 0; i < needed.size();) {
+    const long long a = needed[i] - 1;
+    std::size_t j = i;
+    while (j < needed.size() && needed[j] - 1 < a + kChunk) ++j;
+    std::size_t k = i;
+    forNodes(exo, path, m.h, a, needed[j - 1] - a, [&](long long node, const Vec3& x) {
+      if (node + 1 == needed[k]) coords[k++] = x;
+    });
+    i = j;
+  }
+  for (const BlockSlice& s : slices) {
+    const BlockLayout& L = m.layouts[s.block];
+    const MeshBlock& blk = m.blocks[s.block];
+    const std::string where = blockLabel(blk.id, blk.name);
+    for (int e = 0; e < s.count; ++e) {
+      const long long elem = s.first + e;
+      const std::string element = "element " + std::to_string(elem + 1) + " of " + where;
+      std::array<Vec3, 8> x;
+      for (int a = 0; a < L.nodesPer; ++a) {
+        const int node = s.conn[static_cast<std::size_t>(e) * L.nodesPer + a];
+        if (node < 1 || node > m.h.numNodes)
+          fail(path, element + " names node " + std::to_string(node) + ", but the mesh has " + std::to_string(m.h.numNodes) + " nodes");
+        if (a < L.corners) x[a] = coords[std::lower_bound(needed.begin(), needed.end(), node) - needed.begin()];
+        elementsOfNode.emplace_back(node, static_cast<int>(d.X.size()));
+      }
+      const double sphereVolume = L.shape == Shape::Sphere ? s.attr[static_cast<std::size_t>(e) * L.attrs + 1] : 0.0;
+      Measure me = elementMeasure(path, element, blk.elementType, L.shape, x, sphereVolume);
+      if (L.shape == Shape::Quad || L.shape == Shape::Tri) me.volume *= thickness;
+      if (d.dim == 2) me.centroid[2] = 0;  // 2D: the x-y plane (as particle files do)
+      d.X.push_back(me.centroid);
+      d.volume.push_back(me.volume);
+      d.block.push_back(blk.id);
+    }
+  }
+  std::sort(elementsOfNode.begin(), elementsOfNode.end());
+  elementsOfNode.erase(std::unique(elementsOfNode.begin(), elementsOfNode.end()), elementsOfNode.end());
+}
+
+/// Node sets: the particles of the elements touching the set's nodes (Peridigm's rule), those of
+/// the range (global numbers, sorted). Every set is read whole, in pieces.
+void readNodeSets(int exo, const std::string& path, const MeshHeader& h, long long begin,
+                  const std::vector<std::pair<int, int>>& elementsOfNode, ExodusMesh& mesh) {
   if (h.numNodeSets <= 0) return;
   std::vector<int> ids(h.numNodeSets);
   if (ex_get_node_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable node set ids");
+  std::vector<int> nodes;
   for (int id : ids) {
     MeshSet set;
     set.id = id;
@@ -379,51 +471,64 @@ void readNodeSets(int exo, const std::string& path, const MeshHeader& h, const s
     if (set.name.empty()) set.name = "nodelist_" + std::to_string(id);  // Peridigm's name for an unnamed node set
     int n = 0, df = 0;
     if (ex_get_node_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
-    std::vector<int> nodes(n);
-    if (n > 0 && ex_get_node_set(exo, id, nodes.data()) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
-    for (int node : nodes) {
-      if (node < 1 || node > h.numNodes)
-        fail(path, "node set " + std::to_string(id) + " names node " + std::to_string(node) + ", but the mesh has " +
-                       std::to_string(h.numNodes) + " nodes");
-      for (int e : elementsOfNode[node - 1]) set.particles.push_back(e);
+    for (long long a = 0; a < n; a += kChunk) {
+      const long long m = std::min<long long>(kChunk, n - a);
+      nodes.assign(m, 0);
+      if (ex_get_partial_node_set(exo, id, a + 1, m, nodes.data()) < 0) fail(path, "has an unreadable node set " + std::to_string(id));
+      for (int node : nodes) {
+        if (node < 1 || node > h.numNodes)
+          fail(path, "node set " + std::to_string(id) + " names node " + std::to_string(node) + ", but the mesh has " +
+                         std::to_string(h.numNodes) + " nodes");
+        for (auto it = std::lower_bound(elementsOfNode.begin(), elementsOfNode.end(), std::make_pair(node, -1));
+             it != elementsOfNode.end() && it->first == node; ++it)
+          set.particles.push_back(static_cast<int>(begin + it->second));
+      }
     }
     uniqueSorted(set.particles);
     mesh.nodeSets.push_back(set);
   }
 }
 
-/// Side sets: the particles of the listed elements (Peridigm ignores side sets).
-void readSideSets(int exo, const std::string& path, const MeshHeader& h, ExodusMesh& mesh) {
+/// Side sets: the particles of the listed elements (Peridigm ignores side sets), those of the
+/// range [begin, end) of the mesh's `elements`.
+void readSideSets(int exo, const std::string& path, const MeshHeader& h, long long elements, long long begin,
+                  long long end, ExodusMesh& mesh) {
   if (h.numSideSets <= 0) return;
-  const int elements = mesh.disc.size();
   std::vector<int> ids(h.numSideSets);
   if (ex_get_side_set_ids(exo, ids.data()) < 0) fail(path, "has unreadable side set ids");
+  std::vector<int> elems, sides;
   for (int id : ids) {
     MeshSet set;
     set.id = id;
     set.name = entityName(exo, EX_SIDE_SET, id);
     int n = 0, df = 0;
     if (ex_get_side_set_param(exo, id, &n, &df) < 0) fail(path, "has an unreadable side set " + std::to_string(id));
-    std::vector<int> elems(n), sides(n);
-    if (n > 0 && ex_get_side_set(exo, id, elems.data(), sides.data()) < 0)
-      fail(path, "has an unreadable side set " + std::to_string(id));
-    for (int e : elems) {
-      if (e < 1 || e > elements)
-        fail(path, "side set " + std::to_string(id) + " names element " + std::to_string(e) + ", but the mesh has " +
-                       std::to_string(elements) + " elements");
-      set.particles.push_back(e - 1);
+    for (long long a = 0; a < n; a += kChunk) {
+      const long long m = std::min<long long>(kChunk, n - a);
+      elems.assign(m, 0), sides.assign(m, 0);
+      if (ex_get_partial_side_set(exo, id, a + 1, m, elems.data(), sides.data()) < 0)
+        fail(path, "has an unreadable side set " + std::to_string(id));
+      for (int e : elems) {
+        if (e < 1 || e > elements)
+          fail(path, "side set " + std::to_string(id) + " names element " + std::to_string(e) + ", but the mesh has " +
+                         std::to_string(elements) + " elements");
+        if (e - 1 >= begin && e - 1 < end) set.particles.push_back(e - 1);
+      }
     }
     uniqueSorted(set.particles);
     mesh.sideSets.push_back(set);
   }
 }
 
-/// The discretisation's box, flags and nominal spacing: the median particle's edge (3D:
-/// volume^(1/3); 2D: (volume / h)^(1/2)). The horizon is the scene's (0 here).
+/// The discretisation's box, flags and nominal spacing from its particles: the median
+/// particle's edge (3D: volume^(1/3); 2D: (volume / h)^(1/2)). The horizon is the scene's (0
+/// here). No particles: box and spacing stay 0 (a range's caller takes the body's).
 void finishDiscretization(Discretization& d) {
   const std::size_t n = d.X.size();
   d.fictitious.assign(n, 0);
   d.sideMask.assign(n, 0);
+  d.horizon = 0;
+  if (n == 0) return;
   d.boxLower = d.X[0];
   d.boxUpper = d.X[0];
   for (const Vec3& x : d.X) {
@@ -432,53 +537,62 @@ void finishDiscretization(Discretization& d) {
   }
   std::vector<double> v(d.volume);
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  const double med = v[v.size() / 2];
-  d.dx = d.dim == 3 ? std::cbrt(med) : std::sqrt(med / d.thickness);
-  d.horizon = 0;
+  d.dx = meshSpacing(d, v[v.size() / 2]);
 }
 
 }  // namespace
 
-ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
-  if (dim != 2 && dim != 3) fail(path, "Exodus meshes are for 2D and 3D scenes ('Discretization/Dimension' = 2 or 3)");
-  if (!(thickness > 0) || !std::isfinite(thickness)) fail(path, "the thickness must be positive and finite");
-  checkNetcdf(path);
-  ex_opts(0);  // no messages on stderr and no abort: every failure becomes this reader's sentence
-  int cpuWordSize = sizeof(double), ioWordSize = 0;
-  float version = 0;
-  ExodusFile f;
-  f.id = ex_open(path.c_str(), EX_READ, &cpuWordSize, &ioWordSize, &version);
-  if (f.id < 0) fail(path, "is not an Exodus II file (the Exodus library cannot open it)");
-  const int exo = f.id;
-  // Names longer than Exodus' default 32 characters come back whole only when asked for.
-  const int usedNameLength = static_cast<int>(ex_inquire_int(exo, EX_INQ_DB_MAX_USED_NAME_LENGTH));
-  if (usedNameLength > MAX_STR_LENGTH) ex_set_max_name_length(exo, std::min(usedNameLength, 256));
-  const MeshHeader h = readHeader(exo, path, dim);
-  std::vector<int> blockIds(h.numBlocks);
-  if (ex_get_elem_blk_ids(exo, blockIds.data()) < 0) fail(path, "has unreadable element block ids");
+ExodusMeshSize exodusMeshSize(const std::string& path, int dim) {
+  OpenMesh m;
+  openMesh(path, dim, m);
+  return {m.elements, m.h.numNodes};
+}
 
+ExodusMesh readExodusMeshRange(const std::string& path, int dim, double thickness, const ExodusRange& range,
+                               const ReadPhase& phase) {
+  if (!(thickness > 0) || !std::isfinite(thickness)) fail(path, "the thickness must be positive and finite");
+  OpenMesh m;
   ExodusMesh mesh;
   mesh.disc.dim = dim;
   mesh.disc.thickness = thickness;
-  std::vector<std::vector<int>> elementsOfNode(h.numNodes);  // 0-based element = particle ids
-  int elem = 0;  // running element number = particle id (file order, block by block)
-  for (int id : blockIds) readBlock(exo, path, h, id, thickness, mesh, elementsOfNode, elem);
-  if (mesh.disc.X.empty()) fail(path, "has no elements in its element blocks");
-  for (std::size_t i = 0; i < mesh.blocks.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (mesh.blocks[i].id == mesh.blocks[j].id) fail(path, "has two element blocks with id " + std::to_string(mesh.blocks[i].id));
-  readNodeSets(exo, path, h, elementsOfNode, mesh);
-  readSideSets(exo, path, h, mesh);
+  std::vector<std::pair<int, int>> elementsOfNode;  // (node, local particle), sorted
+  // 1. Header and blocks; every coordinate of the range's nodes finite.
+  phase([&] {
+    openMesh(path, dim, m);
+    forNodes(m.file.id, path, m.h, range.nodeBegin, range.nodeEnd - range.nodeBegin, [&](long long node, const Vec3& x) {
+      if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+        fail(path, "node " + std::to_string(node + 1) + " has a coordinate that is not a finite number");
+    });
+    mesh.blocks = m.blocks;
+  });
+  // 2. The range's elements; 3. the sets.
+  phase([&] { readElements(m, path, thickness, range.elementBegin, range.elementEnd, mesh, elementsOfNode); });
+  phase([&] {
+    readNodeSets(m.file.id, path, m.h, range.elementBegin, elementsOfNode, mesh);
+    readSideSets(m.file.id, path, m.h, m.elements, range.elementBegin, range.elementEnd, mesh);
+  });
   finishDiscretization(mesh.disc);
   return mesh;
 }
 
+ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
+  const ExodusMeshSize size = exodusMeshSize(path, dim);
+  return readExodusMeshRange(path, dim, thickness, {0, size.elements, 0, size.nodes},
+                             [](const std::function<void()>& f) { f(); });
+}
+
 #else
 
-ExodusMesh readExodusMesh(const std::string& path, int, double) {
+namespace {
+[[noreturn]] void withoutExodus(const std::string& path) {
   throw std::runtime_error(path + ": this perinox was built without Exodus II, so it cannot read Exodus meshes "
                                   "(install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
 }
+}  // namespace
+
+ExodusMeshSize exodusMeshSize(const std::string& path, int) { withoutExodus(path); }
+ExodusMesh readExodusMeshRange(const std::string& path, int, double, const ExodusRange&, const ReadPhase&) { withoutExodus(path); }
+ExodusMesh readExodusMesh(const std::string& path, int, double) { withoutExodus(path); }
 
 #endif
 

@@ -11,6 +11,7 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -204,6 +205,46 @@ Share partitioned(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Disc
   return receiveSorted(*comm, part, recs, parts);
 }
 
+/// part's box becomes the body's: the particles' bounds over every rank's part (a rank without
+/// particles adds nothing).
+void takeBodyBox(const Teuchos::Comm<int>& comm, Discretization& part) {
+  const bool any = !part.X.empty();
+  double lo[3], hi[3], bodyLo[3], bodyHi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = any ? part.boxLower[a] : std::numeric_limits<double>::infinity();
+    hi[a] = any ? -part.boxUpper[a] : std::numeric_limits<double>::infinity();
+  }
+  MPI_Allreduce(lo, bodyLo, 3, MPI_DOUBLE, MPI_MIN, rawComm(comm));
+  MPI_Allreduce(hi, bodyHi, 3, MPI_DOUBLE, MPI_MIN, rawComm(comm));
+  for (int a = 0; a < 3; ++a) part.boxLower[a] = bodyLo[a], part.boxUpper[a] = -bodyHi[a];
+}
+
+/// The k-th smallest (0-based) of the positive finite values every rank holds a part of, exactly
+/// (collective): bisection on the values' bit patterns, which order positive doubles as integers,
+/// counting over the ranks at each of at most 64 steps.
+double kthSmallest(const Teuchos::Comm<int>& comm, const std::vector<double>& mine, long long k) {
+  auto bits = [](double v) {
+    std::int64_t b;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
+  };
+  std::int64_t top = 0, most = 0;
+  for (double v : mine) top = std::max(top, bits(v));
+  MPI_Allreduce(&top, &most, 1, MPI_INT64_T, MPI_MAX, rawComm(comm));
+  std::int64_t lo = 0, hi = most;  // count(<= hi) > k; find the least such pattern
+  while (lo < hi) {
+    const std::int64_t mid = lo + (hi - lo) / 2;
+    long long below = 0, all = 0;
+    for (double v : mine) below += bits(v) <= mid;
+    MPI_Allreduce(&below, &all, 1, MPI_LONG_LONG, MPI_SUM, rawComm(comm));
+    if (all > k) hi = mid;
+    else lo = mid + 1;
+  }
+  double v;
+  std::memcpy(&v, &lo, sizeof v);
+  return v;
+}
+
 /// 1-2 for a lattice: this rank's slab of lattice sites generated (ids and the jitter's random
 /// stream continued by prefix sums of the slabs' counts), then partitioned. n: the lattice's size.
 Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const LatticeSpec& spec, PartitionMethod method,
@@ -252,15 +293,7 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Parti
   long lines = 0;
   MPI_Allreduce(&lastLine, &lines, 1, MPI_LONG, MPI_MAX, mc);
   if (n == 0) throw std::runtime_error(file.path + ":" + std::to_string(lines) + ": no particles in file");
-  // The body's box: the particles' bounds over every rank's part.
-  double lo[3], hi[3], bodyLo[3], bodyHi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = mine ? part.boxLower[a] : std::numeric_limits<double>::infinity();
-    hi[a] = mine ? -part.boxUpper[a] : std::numeric_limits<double>::infinity();
-  }
-  MPI_Allreduce(lo, bodyLo, 3, MPI_DOUBLE, MPI_MIN, mc);
-  MPI_Allreduce(hi, bodyHi, 3, MPI_DOUBLE, MPI_MIN, mc);
-  for (int a = 0; a < 3; ++a) part.boxLower[a] = bodyLo[a], part.boxUpper[a] = -bodyHi[a];
+  takeBodyBox(*comm, part);
   return partitioned(comm, part, first, n, method);
 }
 
@@ -391,6 +424,63 @@ std::shared_ptr<ProblemSpec> problemOnLocalParticleFile(const Teuchos::RCP<const
                                                         const ParticleFileSpec& file, const MaterialSpec& material,
                                                         PartitionMethod partition) {
   return problemOnOwnedShare(comm, file, material, partition);
+}
+
+std::shared_ptr<ProblemSpec> problemOnLocalParticles(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                     const Discretization& slab, long long firstId,
+                                                     const MaterialSpec& material, PartitionMethod partition) {
+  long long mine = slab.size(), n = 0, first = 0;
+  const MPI_Comm mc = rawComm(*comm);
+  MPI_Allreduce(&mine, &n, 1, MPI_LONG_LONG, MPI_SUM, mc);
+  MPI_Exscan(&mine, &first, 1, MPI_LONG_LONG, MPI_SUM, mc);
+  if (comm->getRank() == 0) first = 0;
+  long long disagree = first != firstId, any = 0;
+  MPI_Allreduce(&disagree, &any, 1, MPI_LONG_LONG, MPI_MAX, mc);
+  if (any) throw std::invalid_argument("problemOnLocalParticles: the ranks' particles must have consecutive ids in rank order "
+                                       "(a rank's firstId is the particle count of the ranks before it)");
+  if (n == 0) throw std::invalid_argument("problemOnLocalParticles: no rank has particles");
+  if (!(slab.horizon > 0)) throw std::invalid_argument("problemOnLocalParticles: the horizon must be positive");
+  Discretization part = emptyLike(slab);
+  part.X = slab.X, part.volume = slab.volume, part.block = slab.block;
+  part.fictitious = slab.fictitious, part.sideMask = slab.sideMask;
+  part.fictitious.resize(part.X.size(), 0), part.sideMask.resize(part.X.size(), 0), part.block.resize(part.X.size(), 0);
+  if (part.volume.size() != part.X.size())
+    throw std::invalid_argument("problemOnLocalParticles: the slab has " + std::to_string(part.X.size()) + " positions but " +
+                                std::to_string(part.volume.size()) + " volumes");
+  takeBodyBox(*comm, part);
+  return problemOnShare(comm, partitioned(comm, part, firstId, n, partition), n, material, partition);
+}
+
+ExodusMesh readLocalExodusMesh(const Teuchos::Comm<int>& comm, const std::string& path, int dim, double thickness) {
+  const int ranks = comm.getSize(), rank = comm.getRank();
+  ExodusMeshSize size;
+  throwAgreed<std::runtime_error>(comm, [&] { size = exodusMeshSize(path, dim); });
+  const ExodusRange range{partitionBegin(size.elements, ranks, rank), partitionBegin(size.elements, ranks, rank + 1),
+                          partitionBegin(size.nodes, ranks, rank), partitionBegin(size.nodes, ranks, rank + 1)};
+  ExodusMesh mesh = readExodusMeshRange(path, dim, thickness, range, [&](const std::function<void()>& phase) {
+    throwAgreed<std::runtime_error>(comm, phase);
+  });
+  takeBodyBox(comm, mesh.disc);
+  mesh.disc.dx = meshSpacing(mesh.disc, kthSmallest(comm, mesh.disc.volume, size.elements / 2));
+  return mesh;
+}
+
+std::vector<long long> heldMembers(const Teuchos::Comm<int>& comm, const std::vector<long long>& held, long long n,
+                                   const std::vector<int>& slabMembers) {
+  const int ranks = comm.getSize(), rank = comm.getRank();
+  std::vector<double> asks;
+  std::vector<int> to;
+  for (long long id : held) asks.push_back(static_cast<double>(id)), asks.push_back(rank), to.push_back(slabOf(id, n, ranks));
+  const std::vector<double> got = exchange(comm, asks, 2, to);
+  std::vector<double> yes;
+  to.clear();
+  for (std::size_t k = 0; k + 1 < got.size(); k += 2)
+    if (std::binary_search(slabMembers.begin(), slabMembers.end(), static_cast<int>(got[k])))
+      yes.push_back(got[k]), to.push_back(static_cast<int>(got[k + 1]));
+  std::vector<long long> members;
+  for (double id : exchange(comm, yes, 1, to)) members.push_back(static_cast<long long>(id));
+  std::sort(members.begin(), members.end());
+  return members;
 }
 
 std::vector<double> exchangeRecords(const Teuchos::Comm<int>& comm, const std::vector<double>& values, int width,

@@ -26,7 +26,7 @@ bool exodusOutputAvailable() {
 ExodusWriter::ExodusWriter(const std::string& path, int, double, const std::vector<Eigen::Vector3d>&,
                            const std::vector<double>&, const std::vector<int>&,
                            const std::map<std::string, std::vector<int>>&, const std::vector<std::string>&,
-                           const std::vector<std::string>&)
+                           const std::vector<std::string>&, const std::vector<long long>&)
     : path_(path) {
   throw std::runtime_error(path + ": this perinox was built without Exodus II and cannot write Exodus files");
 }
@@ -61,7 +61,8 @@ struct Names {
 ExodusWriter::ExodusWriter(const std::string& path, int dim, double thickness, const std::vector<Eigen::Vector3d>& X,
                            const std::vector<double>& volume, const std::vector<int>& block,
                            const std::map<std::string, std::vector<int>>& nodeSets,
-                           const std::vector<std::string>& nodalNames, const std::vector<std::string>& globalNames)
+                           const std::vector<std::string>& nodalNames, const std::vector<std::string>& globalNames,
+                           const std::vector<long long>& ids)
     : path_(path), particles_(X.size()), nodalVars_(nodalNames.size()), globalVars_(globalNames.size()) {
   ex_opts(0);  // errors come back as return codes, turned into this writer's sentence
   int cpu = sizeof(double), io = sizeof(double);
@@ -70,11 +71,11 @@ ExodusWriter::ExodusWriter(const std::string& path, int dim, double thickness, c
   try {
     ex_set_max_name_length(exo_, kNameLength);
     const int n = static_cast<int>(particles_);
-    std::vector<int> ids(block);
-    std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    std::vector<int> blockIds(block);
+    std::sort(blockIds.begin(), blockIds.end());
+    blockIds.erase(std::unique(blockIds.begin(), blockIds.end()), blockIds.end());
     const int spatial = dim < 2 ? 2 : dim;  // 1D bars are drawn on the x axis of a 2D file
-    check(ex_put_init(exo_, "perinox results", spatial, n, n, static_cast<int>(ids.size()),
+    check(ex_put_init(exo_, "perinox results", spatial, n, n, static_cast<int>(blockIds.size()),
                       static_cast<int>(nodeSets.size()), 0),
           path, "ex_put_init");
     std::vector<double> x(n), y(n), z(n);
@@ -84,16 +85,24 @@ ExodusWriter::ExodusWriter(const std::string& path, int dim, double thickness, c
       z[p] = X[p][2];
     }
     check(ex_put_coord(exo_, x.data(), y.data(), z.data()), path, "ex_put_coord");
+    if (!ids.empty() && ids.size() != particles_) throw std::logic_error("ExodusWriter: ids and positions differ in size");
+    // Node p + 1 is particle p of X, whose id is ids[p] (or p): the node map holds the ids + 1.
+    auto idOf = [&](int p) { return ids.empty() ? p + 1 : static_cast<int>(ids[p] + 1); };
+    if (!ids.empty() && n > 0) {
+      std::vector<int> nodeMap(n);
+      for (int p = 0; p < n; ++p) nodeMap[p] = idOf(p);
+      check(ex_put_node_num_map(exo_, nodeMap.data()), path, "ex_put_node_num_map");
+    }
     // Elements grouped by block (Exodus numbers elements block after block); the element map
     // gives each element its particle's id + 1, so ParaView's ids are perinox's.
     std::vector<int> elemMap;
-    for (int id : ids) {
+    for (int id : blockIds) {
       std::vector<int> conn;
       std::vector<double> attr;
       for (int p = 0; p < n; ++p) {
         if (block[p] != id) continue;
         conn.push_back(p + 1);
-        elemMap.push_back(p + 1);
+        elemMap.push_back(idOf(p));
         const double r = dim == 3 ? std::cbrt(3 * volume[p] / (4 * M_PI)) : std::sqrt(volume[p] / (M_PI * thickness));
         attr.push_back(r);
         attr.push_back(volume[p]);
@@ -106,7 +115,7 @@ ExodusWriter::ExodusWriter(const std::string& path, int dim, double thickness, c
       const std::string bname = "block_" + std::to_string(id);
       check(ex_put_name(exo_, EX_ELEM_BLOCK, id, bname.c_str()), path, "ex_put_name");
     }
-    check(ex_put_elem_num_map(exo_, elemMap.data()), path, "ex_put_elem_num_map");
+    if (n > 0) check(ex_put_elem_num_map(exo_, elemMap.data()), path, "ex_put_elem_num_map");
     int setId = 1;
     for (const auto& [name, members] : nodeSets) {
       std::vector<int> nodes;

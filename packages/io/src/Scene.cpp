@@ -28,6 +28,7 @@
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
 #include "perinox/evaluator/LowestRankMessage.hpp"
+#include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/evaluator/Problem.hpp"
 #include "perinox/model/Partition.hpp"
 
@@ -381,8 +382,8 @@ void discretizationSchema(ParameterList& d) {
                              "how particles are split among MPI ranks: ");
   setChoice(d, "Construction", "Replicated",
             {{"Replicated", "every rank builds the whole discretisation (its positions, loads and regions) and keeps its particles' families"},
-             {"Distributed", "Lattice and Particle File: each rank generates (a lattice) or reads from its slice of the file's bytes "
-                             "(a particle file) only its part and keeps its owned particles and those within two horizons of them; "
+             {"Distributed", "each rank generates (a lattice) or reads (its slice of a particle file's bytes, its range of an "
+                             "Exodus mesh's elements) only its part and keeps its owned particles and those within two horizons of them; "
                              "regions, boundary conditions and loads are found rank by rank (docs/architecture.md, \"Distribution\")"}},
             "how the discretisation is built on MPI ranks: ");
 }
@@ -498,7 +499,8 @@ void solverSchema(ParameterList& so) {
 void outputSchema(ParameterList& o) {
   o.set("VTK", true, "write .vtu/.pvtu fields (when Format is VTU or Both)");
   setChoice(o, "Format", "VTU", {{"VTU", "fields.pvtu and fields_<rank>.vtu of the last state"},
-            {"Exodus", "fields.e: every converged load step as an Exodus II time step (docs/exodus.md)"}, {"Both", "VTU and Exodus"}});
+            {"Exodus", "fields.e: every converged load step as an Exodus II time step (Construction = Distributed on p > 1 "
+                        "ranks: one file per rank, fields.e.<p>.<r>; docs/exodus.md)"}, {"Both", "VTU and Exodus"}});
   o.set("Plots", true, "write PNG plots (needs python3-matplotlib)");
 }
 
@@ -1063,8 +1065,15 @@ std::vector<int> meshSetRegion(const SceneBuild& b, const Section& r, const std:
   const auto& sets = type == "Node Set" ? mesh.nodeSets : mesh.sideSets;
   for (const auto& s : sets)
     if (name.empty() ? s.id == id : s.name == name) {
-      if (s.particles.empty()) fail(file, "region '" + region + "': the mesh's " + type + " with " + what + " is empty");
-      return s.particles;
+      if (b.sumOverRanks(static_cast<long long>(s.particles.size())) == 0)
+        fail(file, "region '" + region + "': the mesh's " + type + " with " + what + " is empty");
+      if (!b.distributed()) return s.particles;
+      // Each rank holds the set's members in its id slab; its share's members come from there.
+      std::vector<int> ids;
+      for (long long g : heldMembers(*b.comm, b.problem.globalId, b.problem.globalCount, s.particles))
+        ids.push_back(b.problem.index(g));
+      std::sort(ids.begin(), ids.end());
+      return ids;
     }
   fail(file, "region '" + region + "': the mesh has no " + type + " with " + what);
 }
@@ -1253,8 +1262,10 @@ Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
   const double given = dl.get<double>("Spacing");
   if (given < 0) fail(file, "'Discretization/Spacing' must be positive (or 0: from the mesh)");
   if (dl.get<double>("Horizon") < 0) fail(file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-  b.mesh = readExodusMesh(path, b.dim, thickness);
-  Discretization& md = b.mesh.disc;
+  // Distributed: this rank's id slab of the elements, the sets' members in it (heldMembers finds
+  // a share's), the body's box and median spacing.
+  b.mesh = b.distributed() ? readLocalExodusMesh(*b.comm, path, b.dim, thickness) : readExodusMesh(path, b.dim, thickness);
+  Discretization md = std::move(b.mesh.disc);
   if (given > 0) md.dx = given;
   md.horizon = particleHorizon(dl, md.dx, given > 0 ? "" : ", the spacing taken from the mesh");
   return md;  // families: each rank finds its own (localParticles)
@@ -1267,17 +1278,23 @@ void readDiscretization(SceneBuild& b) {
   if (dtype != "Exodus" && !dl.get<std::string>("Mesh File").empty())
     fail(b.file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
   const bool distributed = dl.get<std::string>("Construction") == "Distributed";
-  if (distributed && dtype == "Exodus")
-    fail(b.file, "'Discretization/Construction' = Distributed is for lattices and particle files so far; an Exodus mesh "
-                 "is read whole on every rank (use Construction = Replicated)");
   b.problem.partition = dl.choice<PartitionMethod>("Partition");
   try {
     if (distributed) {
-      // This rank's share only (problemOnLocalLattice, problemOnLocalParticleFile): its owned
-      // particles and those within two horizons of them, with their global ids.
-      auto share = dtype == "Lattice"
-                       ? problemOnLocalLattice(b.comm, readLatticeSpec(dl, b.dim, thickness), b.problem.material, b.problem.partition)
-                       : problemOnLocalParticleFile(b.comm, particleFile(b, dl, thickness), b.problem.material, b.problem.partition);
+      // This rank's share only (problemOnLocalLattice, problemOnLocalParticleFile, an Exodus
+      // mesh's slab through problemOnLocalParticles): its owned particles and those within two
+      // horizons of them, with their global ids.
+      std::shared_ptr<ProblemSpec> share;
+      if (dtype == "Lattice")
+        share = problemOnLocalLattice(b.comm, readLatticeSpec(dl, b.dim, thickness), b.problem.material, b.problem.partition);
+      else if (dtype == "Particle File")
+        share = problemOnLocalParticleFile(b.comm, particleFile(b, dl, thickness), b.problem.material, b.problem.partition);
+      else {
+        b.problem.distributed = true;  // readMesh reads this rank's slab
+        const Discretization slab = readMesh(b, dl, thickness);
+        const long long first = partitionBegin(b.sumOverRanks(slab.size()), b.comm->getSize(), b.comm->getRank());
+        share = problemOnLocalParticles(b.comm, slab, first, b.problem.material, b.problem.partition);
+      }
       ProblemSpec& P = b.problem;
       P.distributed = true;
       P.disc = std::move(share->disc);
@@ -1794,9 +1811,6 @@ void readOutput(SceneBuild& b) {
   if (out.format != "VTU" && !exodusAvailable())
     fail(b.file, "'Output/Format' = " + out.format + ", but this perinox was built without Exodus II (install libexodusii-dev, e.g. with scripts/setup.sh, and rebuild)");
   out.plots = o.get<bool>("Plots");
-  if (out.format != "VTU" && b.distributed())
-    fail(b.file, "'Output/Format' = " + out.format + " gathers the whole body on rank 0, which 'Discretization/Construction' = "
-                 "Distributed does not hold; use Format = VTU (a pvtu piece per rank)");
 }
 
 /// The sublist functions, in the order a scene is read (later ones use what earlier ones built:

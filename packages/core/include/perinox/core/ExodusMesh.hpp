@@ -4,6 +4,7 @@
 // elements are particles given directly (volume: their second attribute, as Peridigm reads them).
 // Element blocks become block ids; node sets and side sets become particle sets.
 // Plain C++; the Exodus II C library (Debian's libexodusii-dev) is used inside the .cpp only.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,36 @@ bool exodusAvailable();
 /// degenerate, inverted or zero-volume element, a sphere without its volume attribute; and when
 /// perinox was built without Exodus II.
 ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness);
+
+/// The sizes a distributed read splits: elements (= particles, over every block) and nodes.
+/// Reads the header and the element blocks only; throws as readExodusMesh for a bad file.
+struct ExodusMeshSize {
+  long long elements = 0, nodes = 0;
+};
+ExodusMeshSize exodusMeshSize(const std::string& path, int dim);
+
+/// A part of a mesh to read: elements [elementBegin, elementEnd) in file order (block after
+/// block; particle ids are these numbers), and the nodes [nodeBegin, nodeEnd) (0-based) whose
+/// coordinates this part checks.
+struct ExodusRange {
+  long long elementBegin = 0, elementEnd = 0, nodeBegin = 0, nodeEnd = 0;
+};
+/// Runs one phase of a read. A distributed read passes one that agrees on failures across the
+/// ranks (each rank reads its own part, and all must stop at the same phase); a whole read runs
+/// the phase as it is.
+using ReadPhase = std::function<void(const std::function<void()>&)>;
+
+/// The part `range` of the mesh, as readExodusMesh reads the whole (which is this with every
+/// element and node): disc holds the range's elements in order (box and spacing of those alone;
+/// the caller of a part takes the body's), blocks every element block, and each node or side set
+/// its members in the range (global element numbers). The coordinates and set lists are read in
+/// pieces of at most 65 536 entries, so no list of the whole mesh's size is held. Three phases:
+/// header, blocks and the range's node coordinates; the range's elements; the sets.
+ExodusMesh readExodusMeshRange(const std::string& path, int dim, double thickness, const ExodusRange& range,
+                               const ReadPhase& phase);
+
+/// A mesh's nominal spacing from its median particle volume (3D: the cube root; 2D: the square
+/// root of volume / thickness).
+double meshSpacing(const Discretization& d, double medianVolume);
 
 }  // namespace perinox

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "perinox/core/ExodusMesh.hpp"
 #include "perinox/model/Partition.hpp"
 
 namespace perinox {
@@ -24,6 +25,19 @@ std::vector<double> exchangeRecords(const Teuchos::Comm<int>& comm, const std::v
 /// The rank whose id slab [partitionBegin(n, ranks, q), partitionBegin(n, ranks, q + 1)) holds
 /// particle id: a rendezvous every rank can name without a table (a directory of owners by slab).
 int idSlabOf(long long id, long long n, int ranks);
+
+/// This rank's id slab of an Exodus mesh (collective): the elements [partitionBegin(E, p, r),
+/// partitionBegin(E, p, r + 1)) of the E in file order, read with readExodusMeshRange (every
+/// failure agreed: all ranks throw the lowest failing rank's std::runtime_error), with the
+/// body's box and the whole mesh's nominal spacing (its exact median volume over the ranks).
+/// The sets hold their members in the slab, so heldMembers finds any rank's members.
+ExodusMesh readLocalExodusMesh(const Teuchos::Comm<int>& comm, const std::string& path, int dim, double thickness);
+
+/// The ids among `held` (this rank's particles, any ids of the n) that are members of a set
+/// every rank holds the part of in its id slab (`slabMembers`, sorted): collective, a question
+/// to each id's slab rank and its answer.
+std::vector<long long> heldMembers(const Teuchos::Comm<int>& comm, const std::vector<long long>& held, long long n,
+                                   const std::vector<int>& slabMembers);
 
 /// The part of every particle when d is split into `parts` parts on this process alone (for
 /// benchmarks that compare partitions for rank counts the machine cannot run, docs/performance.md).

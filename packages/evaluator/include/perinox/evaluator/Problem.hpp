@@ -153,6 +153,18 @@ std::shared_ptr<ProblemSpec> problemOnLocalParticleFile(const Teuchos::RCP<const
                                                         const ParticleFileSpec& file, const MaterialSpec& material,
                                                         PartitionMethod partition = PartitionMethod::Rcb);
 
+/// The same on particles each rank brings (collective): `slab` holds this rank's particles (X,
+/// volume, and block, fictitious and side flags if given) with the consecutive ids firstId,
+/// firstId + 1, ..., where firstId is the particle count of the lower ranks (a rank may bring
+/// none); its dim, thickness, dx and horizon are the body's (the box is taken over the ranks).
+/// For a host program with its own distributed reader, and for meshes read in parts. A slab
+/// whose firstId does not follow the lower ranks', no particles on any rank, a horizon that is
+/// not positive or sizes that disagree are refused as std::invalid_argument on every rank.
+std::shared_ptr<ProblemSpec> problemOnLocalParticles(const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+                                                     const Discretization& slab, long long firstId,
+                                                     const MaterialSpec& material,
+                                                     PartitionMethod partition = PartitionMethod::Rcb);
+
 /// The Gram matrix of the rigid-body modes (translations and rotations about the body's box
 /// centre, lengths in units of dx) restricted to the prescribed DOFs of the particles counted:
 /// all of disc, or the owned ones when distributed (sum it over the ranks).
