@@ -361,12 +361,20 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   }
   j["newton_iterations_total"] = newtonAll;
   const long long newtonTotal = newtonAll;
+  // The cost of a Newton iteration in residual evaluations: Newton's own time (its Jacobians,
+  // linear solves and residuals) per iteration; and the whole solve's time per iteration, which
+  // also carries the tangent predictor's solve, the first assembly's graph and the output.
+  const bool perIteration = facts.residualSeconds > 0 && newtonTotal > 0;
   j["timing"] = {{"setup_s", facts.setupSeconds},
                  {"solve_s", facts.solveSeconds},
+                 {"newton_s", facts.newtonSeconds},
                  {"residual_evaluation_s", facts.residualSeconds},
                  {"solve_in_residuals", facts.residualSeconds > 0 ? facts.solveSeconds / facts.residualSeconds : 0.0},
-                 {"newton_iteration_in_residuals",
-                  facts.residualSeconds > 0 && newtonTotal > 0 ? facts.solveSeconds / facts.residualSeconds / newtonTotal : 0.0}};
+                 {"newton_iteration_in_residuals",  // null where no Newton ran (ADR, arc length)
+                  perIteration && facts.newtonSeconds > 0 ? nlohmann::json(facts.newtonSeconds / facts.residualSeconds / newtonTotal)
+                                                          : nlohmann::json()},
+                 {"solve_per_newton_iteration_in_residuals",
+                  perIteration ? facts.solveSeconds / facts.residualSeconds / newtonTotal : 0.0}};
   j["linear_solves_total"] = solves;
   if (facts.twoStage.setups > 0)
     j["preconditioner"] = {{"type", "Two-Stage"},

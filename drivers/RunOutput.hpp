@@ -25,6 +25,7 @@ struct RunFacts {
   // solve), the solve (every load step), and one residual evaluation at the final state (median
   // of three), the unit of the machine-independent cost ratios in docs/performance.md.
   double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
+  double newtonSeconds = 0;        // the part of the solve inside Newton's solves (load stepping)
   TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
   nlohmann::json partition;        // the partition: method, owned and ghost particles per rank
 };

@@ -246,6 +246,7 @@ struct Solved {
   bool converged = false;
   double elapsedBefore = 0.0;  // wall time of the earlier segments of a resumed run
   int segment = 1;             // 1, or the runs a checkpointed run was split into
+  double newtonSeconds = 0.0;  // wall time inside Newton's solves (not the predictor, output, ...)
 };
 
 /// Everything a solve of the scene is given: the evaluator, the load-factor model around it, the
@@ -267,7 +268,15 @@ Solved loadStepping(const SolveContext& c, const std::optional<Checkpoint>& resu
   const Scene& scene = c.scene;
   auto newton = Teuchos::rcp(new NewtonSolver(c.model, Teuchos::rcp(new EvaluatorResidualScale(c.evaluator)),
                                               newtonOptions(scene.solver)));
-  const StepSolve newtonSolve = [newton](Thyra::VectorBase<double>& xs) { return newton->solve(xs); };
+  // Newton's own wall time (Jacobians, linear solves, residuals of its iterations), the numerator
+  // of the cost of a Newton iteration in residual evaluations (summary.json "timing").
+  auto newtonSeconds = std::make_shared<double>(0.0);
+  const StepSolve newtonSolve = [newton, newtonSeconds](Thyra::VectorBase<double>& xs) {
+    const double a = wallSeconds();
+    NewtonResult r = newton->solve(xs);
+    *newtonSeconds += wallSeconds() - a;
+    return r;
+  };
   LoadStepper stepper(c.model, scene.solver.method == "ADR" ? adrStepSolve(scene, c.evaluator) : newtonSolve,
                       loadSteppingOptions(scene, *c.evaluator));
   stepper.setReequilibrationSolve(newtonSolve);
@@ -294,6 +303,7 @@ Solved loadStepping(const SolveContext& c, const std::optional<Checkpoint>& resu
   out.loadFactor = stepper.state().loadFactor;
   out.x = Thyra::createMember(c.evaluator->get_x_space());
   Thyra::copy(stepper.converged(), out.x.ptr());
+  out.newtonSeconds = *newtonSeconds;
   return out;
 }
 
@@ -480,6 +490,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   RunFacts facts = runFacts(*evaluator, x, solved, resume, options);
   facts.setupSeconds = tSolve - t0;
   facts.solveSeconds = solveSeconds;
+  facts.newtonSeconds = solved.newtonSeconds;
   commitResults(scene, res, facts, options, folders.output, stagingGuard, *comm);
   return res;
 }

@@ -286,7 +286,7 @@ RCP<MV> rigidBodyModes(const Problem& pb, bool allDofs, bool zeroPrescribed) {
   const PeridynamicEvaluator& ev = *pb.ev;
   const ProblemSpec& P = ev.problem();
   const int D = P.dim();
-  const int nModes = D == 1 ? 1 : (D == 2 ? 3 : 6);
+  const int nModes = rigidModeCount(D);
   auto B = rcp(new MV(allDofs ? pb.allMap : ev.ownedFreeMap(), nModes));
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const auto& X : P.disc.X) c += X;
@@ -300,17 +300,7 @@ RCP<MV> rigidBodyModes(const Problem& pb, bool allDofs, bool zeroPrescribed) {
       for (int a = 0; a < D; ++a) {
         const bool fixed = ev.freeDof(p, a) < 0;
         if (fixed && !allDofs) continue;
-        double v = 0;
-        if (m < D) {
-          v = m == a ? 1.0 : 0.0;
-        } else if (D == 2) {
-          v = a == 0 ? -r[1] : r[0];
-        } else {
-          Eigen::Vector3d w = Eigen::Vector3d::Zero();
-          w[m - 3] = 1.0;
-          v = w.cross(r)[a];
-        }
-        col[k++] = fixed && zeroPrescribed ? 0.0 : v;
+        col[k++] = fixed && zeroPrescribed ? 0.0 : rigidModeValue(m, a, D, r);
       }
     }
   }

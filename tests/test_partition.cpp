@@ -374,6 +374,17 @@ TEST(DistributedProblem, ABadShareIsRefusedOnEveryRank) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("rigid-body motion"), std::string::npos) << e.what();
   }
+  // A block entry no particle of the body is in (every share misses it): refused over the ranks
+  // with validateProblem's sentence for a replicated problem.
+  auto blocks = problemOnLocalLattice(comm(), spec, mat);
+  load(*blocks, spec);
+  blocks->blocks = {BlockSpec{1, mat}, BlockSpec{7, mat}};
+  try {
+    PeridynamicEvaluator ev(comm(), blocks);
+    FAIL() << "accepted a block without particles";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("blocks[1] names block 7, which has no particle"), std::string::npos) << e.what();
+  }
 }
 
 namespace {

@@ -98,7 +98,7 @@ def main():
             row.update({"status": "ran" if code in (0, 3) else f"exit {code}", "steps": len(steps), "newton": newton,
                         "krylov_per_solve": round(krylov / solves, 2), "solve_s": round(solve, 2),
                         "s_per_newton": round(solve / newton, 3) if newton else float("nan"),
-                        "newton_iteration_in_residuals": round(t.get("newton_iteration_in_residuals", float("nan")), 1),
+                        "newton_iteration_in_residuals": round(t.get("newton_iteration_in_residuals") or float("nan"), 1),
                         "peak_rss_mib": round(max(rss, j.get("peak_rss_mib_max_rank", 0)), 1),
                         "bonds_broken_measured": sum(s["broken_bonds"] for s in steps)})
             print(f"{size:>8} {particles:>9} {preset:>11} {row['status']:>10} {brokenBefore:>7} {newton:>6}"

@@ -12,6 +12,7 @@ fictitious layers at both ends), one load step, delta = 3.015 dx.
 """
 import argparse
 import csv
+import sys
 import json
 import os
 import subprocess
@@ -35,6 +36,11 @@ def peak_rss_mib(pid):
 def csv_appender(path, keys):
     """A csv.DictWriter appending to path (the header written first into a new file) and its file."""
     new = not os.path.exists(path)
+    if not new:
+        with open(path, newline="") as old:
+            header = next(csv.reader(old), [])
+        if header != list(keys):
+            sys.exit(f"{path} has other columns ({','.join(header)}) than this benchmark writes; use a new --out")
     f = open(path, "a", newline="")
     w = csv.DictWriter(f, fieldnames=keys)
     if new:

@@ -56,7 +56,7 @@ endfunction()
 foreach(case bar quad)
   perinox_exodus_run(NAME exodus_${case}_points SCENE ${case}_points.xml NP 1)
   foreach(np 1 3)
-    perinox_exodus_run(NAME exodus_${case}_np${np} SCENE ${case}_exodus.xml NP ${np})
+    perinox_exodus_run(NAME exodus_${case}_np${np} SCENE ${case}_exodus.xml NP ${np} CHECK --partition RCB --distributed)
   endforeach()
   add_test(NAME exodus_${case}_equals_points COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
     --rtol 1e-12 ${PERINOX_TEST_OUT}/exodus_${case}_points ${PERINOX_TEST_OUT}/exodus_${case}_np1)
@@ -68,19 +68,26 @@ foreach(case bar quad)
     FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_np3")
 endforeach()
 
-# Built distributed (each rank reads its range of the elements, tests/exodus/ and docs/exodus.md):
-# the same probes as the whole read on 1 rank, to 1e-10, on 1 and 3 ranks, RCB and slabs.
+# The runs above are built distributed (the default: each rank reads its range of the elements,
+# docs/exodus.md); built replicated (every rank reads the whole mesh) on 1 and 3 ranks, RCB and
+# slabs, they give the same probes to 1e-10; and with slabs built distributed too.
 foreach(case bar quad)
-  foreach(run "np1;1;RCB" "np3;3;RCB" "slabs_np3;3;Slabs")
+  foreach(run "replicated_np1;1;RCB;Replicated" "replicated_np3;3;RCB;Replicated" "replicated_slabs_np3;3;Slabs;Replicated"
+              "slabs_np3;3;Slabs;Distributed")
     list(GET run 0 tag)
     list(GET run 1 np)
     list(GET run 2 method)
-    perinox_exodus_run(NAME exodus_${case}_distributed_${tag} SCENE ${case}_exodus.xml NP ${np}
-      SETS "Discretization/Construction=Distributed" "Discretization/Partition=${method}" CHECK --partition ${method} --distributed)
-    add_test(NAME exodus_${case}_distributed_${tag}_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
-      --rtol 1e-10 ${PERINOX_TEST_OUT}/exodus_${case}_np1 ${PERINOX_TEST_OUT}/exodus_${case}_distributed_${tag})
-    set_tests_properties(exodus_${case}_distributed_${tag}_compare PROPERTIES LABELS mpi
-      FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_distributed_${tag}")
+    list(GET run 3 construction)
+    set(check --partition ${method})
+    if(construction STREQUAL "Distributed")
+      list(APPEND check --distributed)
+    endif()
+    perinox_exodus_run(NAME exodus_${case}_${tag} SCENE ${case}_exodus.xml NP ${np}
+      SETS "Discretization/Construction=${construction}" "Discretization/Partition=${method}" CHECK ${check})
+    add_test(NAME exodus_${case}_${tag}_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+      --rtol 1e-10 ${PERINOX_TEST_OUT}/exodus_${case}_np1 ${PERINOX_TEST_OUT}/exodus_${case}_${tag})
+    set_tests_properties(exodus_${case}_${tag}_compare PROPERTIES LABELS mpi
+      FIXTURES_REQUIRED "exodus_${case}_np1;exodus_${case}_${tag}")
   endforeach()
 endforeach()
 
@@ -123,7 +130,8 @@ perinox_bad_mesh(block_empty bar_points.xml "region 'second half': no particle i
   --set "Regions/second half/Id=5")
 
 # Exodus results: the cantilever (xml/cantilever.xml, 4 load steps) with Output/Format = Both on
-# 1 rank (direct) and 3 ranks (gmres-ilu), and Exodus alone; fields.e read back with the Exodus
+# 1 rank (direct) and 3 ranks (gmres-ilu, built replicated: the gather to rank 0 into one file;
+# the default, one file per rank, is tested below), and Exodus alone; fields.e read back with the Exodus
 # library (tests/exodus/check_exodus_output.cpp) must equal fields.csv at the last step and
 # summary.json's tip probe at every step (on 3 ranks: the gather to rank 0 put every rank's
 # particles in their place).
@@ -139,7 +147,7 @@ foreach(np 1 3)
   foreach(format Both Exodus)
     set(name exodus_output_cantilever_${format}_np${np})
     perinox_run_test(NAME ${name} SCENE cantilever.xml NP ${np}
-      SETS "Output/Format=${format}" "Solver/Load Steps=4" "Solver/Linear Solver Preset=${preset}"
+      SETS "Output/Format=${format}" "Solver/Load Steps=4" "Solver/Linear Solver Preset=${preset}" "Discretization/Construction=Replicated"
       CHECK --converged FIXTURE_SETUP ${name} LABELS unit)
     set(extra)
     if(format STREQUAL "Exodus")
@@ -149,22 +157,21 @@ foreach(np 1 3)
     set_tests_properties(${name}_check PROPERTIES LABELS unit FIXTURES_REQUIRED ${name})
   endforeach()
 endforeach()
-# Block structure kept: the two-block bar's fields.e has blocks 1 and 2, and its spheres' volumes
+# Block structure kept (replicated on 3 ranks: one gathered file): the two-block bar's fields.e has blocks 1 and 2, and its spheres' volumes
 # sum to the bar's volume, 4 x 1 x 1.
-perinox_exodus_run(NAME exodus_output_bar SCENE bar_exodus.xml NP 3 SETS "Output/Format=Exodus")
+perinox_exodus_run(NAME exodus_output_bar SCENE bar_exodus.xml NP 3 SETS "Output/Format=Exodus" "Discretization/Construction=Replicated")
 add_test(NAME exodus_output_bar_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar
   --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu)
 set_tests_properties(exodus_output_bar_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar)
-# One file per rank when built distributed on several ranks (fields.e.3.0 ... fields.e.3.2, no
+# One file per rank when built distributed (the default) on several ranks (fields.e.3.0 ... fields.e.3.2, no
 # rank holding the whole body): joined by their number maps they equal fields.csv and the probes,
 # on the two-block bar (mesh read distributed) and the cantilever (a lattice, Format = Both).
-perinox_exodus_run(NAME exodus_output_bar_distributed SCENE bar_exodus.xml NP 3
-  SETS "Output/Format=Exodus" "Discretization/Construction=Distributed")
+perinox_exodus_run(NAME exodus_output_bar_distributed SCENE bar_exodus.xml NP 3 SETS "Output/Format=Exodus")
 add_test(NAME exodus_output_bar_distributed_check COMMAND check_exodus_output ${PERINOX_TEST_OUT}/exodus_output_bar_distributed
   --probe "second half=second half" --blocks 1,2 --volume 4 --no-vtu --pieces 3)
 set_tests_properties(exodus_output_bar_distributed_check PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_output_bar_distributed)
 perinox_run_test(NAME exodus_output_cantilever_distributed_np3 SCENE cantilever.xml NP 3
-  SETS "Output/Format=Both" "Solver/Load Steps=4" "Solver/Linear Solver Preset=gmres-ilu" "Discretization/Construction=Distributed"
+  SETS "Output/Format=Both" "Solver/Load Steps=4" "Solver/Linear Solver Preset=gmres-ilu"
   CHECK --converged FIXTURE_SETUP exodus_output_cantilever_distributed_np3 LABELS unit)
 add_test(NAME exodus_output_cantilever_distributed_np3_check COMMAND check_exodus_output
   ${PERINOX_TEST_OUT}/exodus_output_cantilever_distributed_np3 --probe tip=tip --blocks 1 --pieces 3)
@@ -266,12 +273,12 @@ foreach(np 1 3)
     --probes a1=0.425 b1=0.775 a2=1.225 b2=1.575 --strain-rtol 1e-2 --interface-rtol 1e-2 --reaction-rtol 0.1)
   set_tests_properties(blocks_exodus_bar_np${np}_closed_form PROPERTIES LABELS "unit;verification" FIXTURES_REQUIRED blocks_exodus_bar_np${np})
 endforeach()
-perinox_exodus_run(NAME blocks_exodus_bar_distributed_np3 SCENE bimaterial_bar_exodus.xml NP 3
-  SETS "Discretization/Construction=Distributed")
-add_test(NAME blocks_exodus_bar_distributed_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
-  --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_distributed_np3)
-set_tests_properties(blocks_exodus_bar_distributed_compare PROPERTIES LABELS mpi
-  FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_distributed_np3")
+perinox_exodus_run(NAME blocks_exodus_bar_replicated_np3 SCENE bimaterial_bar_exodus.xml NP 3
+  SETS "Discretization/Construction=Replicated")
+add_test(NAME blocks_exodus_bar_replicated_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_replicated_np3)
+set_tests_properties(blocks_exodus_bar_replicated_compare PROPERTIES LABELS mpi
+  FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_replicated_np3")
 add_test(NAME blocks_exodus_bar_ranks_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-10 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np1 ${PERINOX_TEST_OUT}/blocks_exodus_bar_np3)
 set_tests_properties(blocks_exodus_bar_ranks_compare PROPERTIES LABELS mpi FIXTURES_REQUIRED "blocks_exodus_bar_np1;blocks_exodus_bar_np3")

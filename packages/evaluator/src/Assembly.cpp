@@ -91,7 +91,7 @@ std::vector<long long> DofMaps::freeIdsOf(const std::vector<GO>& dofs) const {
 Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> DofMaps::rigidBodyModes(const ProblemSpec& problem,
                                                                           const LocalParticles& lp) const {
   const int D = problem.dim();
-  const int nModes = D == 1 ? 1 : (D == 2 ? 3 : 6);
+  const int nModes = rigidModeCount(D);
   auto B = Teuchos::rcp(new Tpetra::MultiVector<double, LO, GO>(ownedFree, nModes));
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   if (!problem.distributed) {
@@ -110,20 +110,8 @@ Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> DofMaps::rigidBodyModes(const 
     LO k = 0;
     for (int l = 0; l < lp.numOwned; ++l) {
       const Eigen::Vector3d r = (lp.X[l] - c) / L;
-      for (int a = 0; a < D; ++a) {
-        if (overlapFreeLid[l * D + a] < 0) continue;
-        double v = 0;
-        if (m < D) {
-          v = m == a ? 1.0 : 0.0;
-        } else if (D == 2) {  // in-plane rotation: (-y, x)
-          v = a == 0 ? -r[1] : r[0];
-        } else {  // rotation about axis m - 3: omega x r
-          Eigen::Vector3d w = Eigen::Vector3d::Zero();
-          w[m - 3] = 1.0;
-          v = w.cross(r)[a];
-        }
-        col[k++] = v;
-      }
+      for (int a = 0; a < D; ++a)
+        if (overlapFreeLid[l * D + a] >= 0) col[k++] = rigidModeValue(m, a, D, r);
     }
   }
   return B;

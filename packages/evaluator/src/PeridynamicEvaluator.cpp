@@ -43,6 +43,17 @@ void validateTogether(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
     return;
   }
   if (err = lowestRankMessage(comm, err); !err.empty()) throw std::invalid_argument(err);
+  // A share may miss a block; the body may not (validateProblem's check of a replicated problem).
+  if (!P.blocks.empty()) {
+    const std::vector<int> of = P.blockIndex();
+    std::vector<long long> mine(P.blocks.size(), 0), all(P.blocks.size(), 0);
+    for (long long g : P.owned) ++mine[of[P.index(g)]];
+    Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, static_cast<int>(mine.size()), mine.data(), all.data());
+    for (std::size_t k = 0; k < all.size(); ++k)
+      if (all[k] == 0)
+        throw std::invalid_argument("ProblemSpec: blocks[" + std::to_string(k) + "] names block " +
+                                    std::to_string(P.blocks[k].id) + ", which has no particle");
+  }
   if (!preventsRigidMotion(comm, P))
     throw std::invalid_argument(
         "ProblemSpec: the prescribed DOFs (fixedMask) do not prevent rigid-body motion: a translation or rotation of "

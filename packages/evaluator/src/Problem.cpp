@@ -162,22 +162,15 @@ void prescribe(ProblemSpec& P, const std::vector<int>& particles, int c, double 
 Eigen::MatrixXd rigidModeGram(const ProblemSpec& P) {
   const Discretization& d = P.disc;
   const int dim = d.dim;
-  const int nm = dim == 1 ? 1 : (dim == 2 ? 3 : 6);
+  const int nm = rigidModeCount(dim);
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nm, nm);
   const Vec3 c = 0.5 * (d.boxLower + d.boxUpper);
   auto add = [&](int p) {
     for (int a = 0; a < dim; ++a) {
       if (!((P.fixedMask[p] >> a) & 1u)) continue;
-      Eigen::VectorXd row = Eigen::VectorXd::Zero(nm);
-      row[a] = 1;  // translation a
+      Eigen::VectorXd row(nm);
       const Vec3 x = (d.X[p] - c) / std::max(d.dx, 1e-300);
-      if (dim == 2) row[2] = a == 0 ? -x[1] : x[0];
-      if (dim == 3) {
-        // rotations about x, y, z: omega x X
-        row[3] = Vec3(1, 0, 0).cross(x)[a];
-        row[4] = Vec3(0, 1, 0).cross(x)[a];
-        row[5] = Vec3(0, 0, 1).cross(x)[a];
-      }
+      for (int m = 0; m < nm; ++m) row[m] = rigidModeValue(m, a, dim, x);
       M += row * row.transpose();
     }
   };

@@ -380,11 +380,12 @@ void discretizationSchema(ParameterList& d) {
                               {partitionName(PartitionMethod::MultiJagged), PartitionMethod::MultiJagged, "Zoltan2 multi-jagged"},
                               {partitionName(PartitionMethod::Slabs), PartitionMethod::Slabs, "contiguous particle-id ranges, lattice rows; for tests"}},
                              "how particles are split among MPI ranks: ");
-  setChoice(d, "Construction", "Replicated",
-            {{"Replicated", "every rank builds the whole discretisation (its positions, loads and regions) and keeps its particles' families"},
-             {"Distributed", "each rank generates (a lattice) or reads (its slice of a particle file's bytes, its range of an "
+  setChoice(d, "Construction", "Distributed",
+            {{"Distributed", "each rank generates (a lattice) or reads (its slice of a particle file's bytes, its range of an "
                              "Exodus mesh's elements) only its part and keeps its owned particles and those within two horizons of them; "
-                             "regions, boundary conditions and loads are found rank by rank (docs/architecture.md, \"Distribution\")"}},
+                             "regions, boundary conditions and loads are found rank by rank (docs/architecture.md, \"Distribution\")"},
+             {"Replicated", "every rank builds the whole discretisation (its positions, loads and regions) and keeps its particles' "
+                            "families; for comparisons (the same answers)"}},
             "how the discretisation is built on MPI ranks: ");
 }
 
@@ -1458,13 +1459,23 @@ void readBlocks(SceneBuild& b) {
     }
     P.blocks.push_back(spec);
   }
+  // Particles per block id, over the owned particles (all of them when replicated); the lowest
+  // block id without an entry over the ranks, with its whole count, so that every rank gives
+  // the same sentence.
   std::map<int, long long> count;
-  for (int p = 0; p < d.size(); ++p) ++count[d.block[p]];
+  for (int p = 0; p < d.size(); ++p)
+    if (b.owns(b.gid(p))) ++count[d.block[p]];
+  int missing = std::numeric_limits<int>::max();
   for (const auto& [id, n] : count)
-    if (!entryOf.count(id)) {
-      b.localFail("block " + std::to_string(id) + " (" + std::to_string(n) + " particles) has no entry under 'Blocks'; give every block its material");
-      break;
-    }
+    if (!entryOf.count(id) && n > 0) missing = std::min(missing, id);
+  if (b.distributed()) {
+    int lowest = missing;
+    Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, missing, Teuchos::outArg(lowest));
+    missing = lowest;
+  }
+  if (missing != std::numeric_limits<int>::max())
+    fail(file, "block " + std::to_string(missing) + " (" + std::to_string(b.sumOverRanks(count.count(missing) ? count.at(missing) : 0)) +
+                   " particles) has no entry under 'Blocks'; give every block its material");
   for (const auto& [id, name] : entryOf)  // every rank has the same entries: the sums agree
     if (b.sumOverRanks(count.count(id) ? count.at(id) : 0) == 0)
       fail(file, "block '" + name + "' names block " + std::to_string(id) + ", which has no particle");

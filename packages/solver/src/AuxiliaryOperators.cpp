@@ -65,7 +65,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, 4, local, global);
   const Eigen::Vector3d centre(global[0] / global[3], global[1] / global[3], global[2] / global[3]);
   const double L = P.disc.horizon;
-  const int nModes = D == 1 ? 1 : (D == 2 ? 3 : 6);
+  const int nModes = rigidModeCount(D);
   auto B = rcp(new MV(allMap, nModes));
   auto C = rcp(new MV(nodeMap, D));
   for (int m = 0; m < nModes; ++m) {
@@ -73,19 +73,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
     LO k = 0;
     for (long long p : ev.ownedParticles()) {
       const Eigen::Vector3d r = (P.disc.X[P.index(p)] - centre) / L;
-      for (int a = 0; a < D; ++a) {
-        double v = 0;
-        if (m < D) {
-          v = m == a ? 1.0 : 0.0;
-        } else if (D == 2) {
-          v = a == 0 ? -r[1] : r[0];
-        } else {
-          Eigen::Vector3d w = Eigen::Vector3d::Zero();
-          w[m - 3] = 1.0;
-          v = w.cross(r)[a];
-        }
-        col[k++] = v;
-      }
+      for (int a = 0; a < D; ++a) col[k++] = rigidModeValue(m, a, D, r);
     }
   }
   for (int d = 0; d < D; ++d) {

@@ -165,6 +165,19 @@ std::shared_ptr<ProblemSpec> problemOnLocalParticles(const Teuchos::RCP<const Te
                                                      const MaterialSpec& material,
                                                      PartitionMethod partition = PartitionMethod::Rcb);
 
+/// The number of rigid-body modes in dim dimensions (1, 3 or 6), and component a of mode m at a
+/// point r from the modes' centre: modes 0..dim-1 the translations, then in 2D the in-plane
+/// rotation (-r_y, r_x), in 3D the rotations e_k x r about axis k = m - 3. The one definition the
+/// rigid-body check, the Krylov near-null space and the auxiliary operators' modes use.
+inline int rigidModeCount(int dim) { return dim == 1 ? 1 : (dim == 2 ? 3 : 6); }
+inline double rigidModeValue(int m, int a, int dim, const Vec3& r) {
+  if (m < dim) return m == a ? 1.0 : 0.0;
+  if (dim == 2) return a == 0 ? -r[1] : r[0];
+  Vec3 w = Vec3::Zero();
+  w[m - 3] = 1.0;
+  return w.cross(r)[a];
+}
+
 /// The Gram matrix of the rigid-body modes (translations and rotations about the body's box
 /// centre, lengths in units of dx) restricted to the prescribed DOFs of the particles counted:
 /// all of disc, or the owned ones when distributed (sum it over the ranks).
