@@ -43,6 +43,13 @@ def scenes(tiny):
         "xml_empty_file": "",
         "xml_whitespace_only": "  \n\t\n",
         "xml_comment_only": "<!-- a scene that holds nothing -->\n",
+        # A custom linear-solver list whose perinox key 'Forcing Term' names no forcing term.
+        "forcing_term_bogus": edited(tiny, '<Parameter name="Linear Solver Preset" type="string" value="direct"/>',
+                                     '<Parameter name="Linear Solver Preset" type="string" value="custom"/>\n'
+                                     '    <ParameterList name="Linear Solver">\n'
+                                     '      <Parameter name="Forcing Term" type="string" value="Bogus"/>\n'
+                                     '      <Parameter name="Linear Solver Type" type="string" value="Amesos2"/>\n'
+                                     '    </ParameterList>'),
     }
     return {k: v if isinstance(v, bytes) else v.encode("utf-8", "surrogateescape") for k, v in out.items()}
 

@@ -137,6 +137,7 @@ class TpetraSink final : public ElementSink {
     const LO* cols = nullptr;
     double* values = nullptr;
     LO numRows = 0;                       // owned free DOFs: overlap lids below are owned rows
+    LO numCols = 0;                       // columns of the owned matrix (its column map)
     const std::vector<LO>* ovColToOwned = nullptr;
     bool active = false;                  // a Jacobian is wanted (a rank may own no entries)
   };
@@ -185,17 +186,20 @@ class TpetraSink final : public ElementSink {
     vals_.resize(cols_.size());
     offsets_.resize(sorted_.size());
   }
-  /// Adds one element row into an owned row of the matrix (merging the sorted columns with the
-  /// row's when its length differs from the last merged one).
+  /// Adds one element row into an owned row of the matrix. The offset of each element column in
+  /// the row comes from a column -> position table filled with the row's columns (once per
+  /// particle: its D rows share their columns; `mergedLength` marks the row it was filled for).
+  /// The table is never cleared: an entry is trusted only when the row holds that column there
+  /// (a Neighbours graph drops some of an element's couplings).
   void addOwnedRow(int row, const double* Krow, std::size_t& mergedLength) {
     const size_t begin = owned_.rowPtr[row], length = owned_.rowPtr[row + 1] - begin;
     const LO* rc = owned_.cols + begin;
-    if (length != mergedLength) {  // merge the sorted element columns with the sorted row
-      size_t k = 0;
+    if (length != mergedLength) {
+      if (where_.size() < static_cast<std::size_t>(owned_.numCols)) where_.assign(owned_.numCols, 0);
+      for (size_t k = 0; k < length; ++k) where_[rc[k]] = static_cast<LO>(k);
       for (std::size_t q = 0; q < sorted_.size(); ++q) {
-        const LO col = sorted_[q].first;
-        while (k < length && rc[k] < col) ++k;
-        offsets_[q] = k < length && rc[k] == col ? static_cast<long>(k) : -1;
+        const LO col = sorted_[q].first, k = where_[col];
+        offsets_[q] = static_cast<size_t>(k) < length && rc[k] == col ? static_cast<long>(k) : -1;
       }
       mergedLength = length;
     }
@@ -213,6 +217,7 @@ class TpetraSink final : public ElementSink {
   std::vector<int> pos_;
   std::vector<std::pair<LO, int>> sorted_;  // (owned column lid, position in the element) by column
   std::vector<long> offsets_;               // position of each sorted column in the current row
+  std::vector<LO> where_;                   // owned column lid -> its position in the last row filled
   std::vector<double> vals_;
 };
 
@@ -448,6 +453,7 @@ Teuchos::RCP<TVector> Assembler::internalForce(const std::vector<double>& u, TCr
     rows.cols = local.graph.entries.data();
     rows.values = local.values.data();
     rows.numRows = static_cast<LO>(ownedFree->getNodeNumElements());
+    rows.numCols = static_cast<LO>(W->getColMap()->getNodeNumElements());
     rows.ovColToOwned = &g->ovColToOwned;
     rows.active = true;
     if (ghost) {

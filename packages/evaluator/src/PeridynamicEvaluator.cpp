@@ -244,9 +244,11 @@ Teuchos::RCP<Thyra::LinearOpBase<double>> PeridynamicEvaluator::create_W_op() co
   } else if (mode_ == JacobianMode::JacobianFree) {
     op = Teuchos::rcp(new DifferenceJacobianOperator(*this, dofs_.ownedFree, fdLambda_, problem_->disc.dx));
   } else {
-    auto A = Teuchos::rcp(new TCrsMatrix(assembler_->graphs(false).owned));
-    A->fillComplete();
-    op = A;
+    if (spareW_.is_null() || spareW_.strong_count() > 1) {
+      spareW_ = Teuchos::rcp(new TCrsMatrix(assembler_->graphs(false).owned));
+      spareW_->fillComplete();
+    }
+    op = spareW_;
   }
   return Thyra::createLinearOp<double, LO, GO, Node>(op, xSpace_, xSpace_);
 }

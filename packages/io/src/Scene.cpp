@@ -478,6 +478,15 @@ void solverSchema(ParameterList& so) {
   so.set("Stability Check", false, "after each converged step, count negative pivots of the tangent (serial LDL^T on rank 0) and stop with a diagnosis when the equilibrium is unstable");
   so.set("Predictor", true, "start each load step from the previous increment extrapolated");
   setNumber(so, "Verbosity", 0, "NOX output level (0 quiet, 1 iterations)", ints(0));
+  setChoice(so, "Forcing Term", "Preset",
+            {{"Constant", "every Newton system solved to 'Linear Tolerance'"},
+             {"Eisenstat-Walker", "the tolerance follows the residual's decrease (NOX Type 2: 1e-4 at first, then 0.9 (|R_k| / "
+                                  "|R_k-1|)^2, between 'Linear Tolerance' and 1e-4; the tangent predictor's system to 1e-3): fewer Krylov "
+                                  "iterations, Newton still quadratic"},
+             {"Preset", "as the linear solver preset says ('Forcing Term' in its list); Constant if it says nothing"}},
+            "iterative linear solvers: how tightly each Newton system is solved: ");
+  setNumber(so, "Linear Tolerance", 1e-12, "iterative linear solvers: relative residual of each Newton system (Forcing Term = Constant), "
+            "or the tightest one asked (Eisenstat-Walker)", reals(End::Open, 0, 1e-2, End::Closed));
   setNumber(so, "Stagnation Stop", 0, "stop a Newton solve early (and cut back) when its normalised residual has not halved over this many iterations; 0: off (a failed solve is still diagnosed as stagnation over its last 5 iterations)", ints(0));
   setChoice(so, "Continuation", "Load Stepping",
             {{"Load Stepping", "load factor 0 to 1 in increments"},
@@ -1744,6 +1753,8 @@ void readSolver(SceneBuild& b) {
   s.predictor = so.get<bool>("Predictor");
   s.stabilityCheck = so.get<bool>("Stability Check");
   s.stagnationStop = so.ranged<int>("Stagnation Stop");
+  s.forcingTerm = so.get<std::string>("Forcing Term");  // Preset: resolved by readLinearSolver
+  s.linearTolerance = so.ranged<double>("Linear Tolerance");
   s.continuation = so.get<std::string>("Continuation");
   readArcLength(b, so);
   s.floorFactor = so.ranged<double>("Round-off Floor Factor");
@@ -1781,8 +1792,9 @@ void readLinearSolver(SceneBuild& b) {
   const std::string& file = b.file;
   s.linearSolverName = so.get<std::string>("Linear Solver Preset");
   s.linearSolver = linearSolverList(b, so, s.linearSolverName);
-  std::string presetJacobian = "Assembled", presetPrecMatrix = "Neighbours";
-  for (auto [key, target] : {std::make_pair("Jacobian", &presetJacobian), std::make_pair("Preconditioner Matrix", &presetPrecMatrix)}) {
+  std::string presetJacobian = "Assembled", presetPrecMatrix = "Neighbours", presetForcing = "Constant";
+  for (auto [key, target] : {std::make_pair("Jacobian", &presetJacobian), std::make_pair("Preconditioner Matrix", &presetPrecMatrix),
+                             std::make_pair("Forcing Term", &presetForcing)}) {
     if (!s.linearSolver->isParameter(key)) continue;
     if (!s.linearSolver->isType<std::string>(key)) fail(file, std::string("the linear solver's '") + key + "' must be a string");
     *target = s.linearSolver->get<std::string>(key);
@@ -1796,6 +1808,9 @@ void readLinearSolver(SceneBuild& b) {
   if (s.preconditionerMatrix == "Preset") s.preconditionerMatrix = presetPrecMatrix;
   if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours")
     fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
+  if (s.forcingTerm == "Preset") s.forcingTerm = presetForcing;
+  if (s.forcingTerm != "Constant" && s.forcingTerm != "Eisenstat-Walker")
+    fail(file, "the linear solver preset's 'Forcing Term' must be Constant or Eisenstat-Walker (got '" + s.forcingTerm + "')");
   s.jfnkLambda = so.ranged<double>("Jacobian-Free Perturbation");
   if (s.jacobian != "Assembled" && s.lineSearch.find("Trust Region") != std::string::npos)
     fail(file, "'Solver/Line Search' = " + s.lineSearch + " needs the transpose of the Jacobian; set 'Solver/Jacobian' = Assembled");

@@ -1,8 +1,10 @@
 #include "perinox/model/Model.hpp"
 
-#include <cmath>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
+#include <numeric>
 #include <sstream>
 
 #include "Effects.hpp"
@@ -171,6 +173,33 @@ struct ImplD final : Model::Impl {
   void prepare(const LocalParticles& p) override {
     for (auto& e : effects) e->prepare(p);
     linValid_ = false;
+    order_ = tileOrder(p);
+  }
+  // The order evaluate() visits the owned particles in: tiles of about 8 horizons a side, row by
+  // row, each tile's particles in id order. An element adds into the matrix rows of its whole
+  // family, and every row is touched by each element that holds it; visiting elements tile by
+  // tile keeps those rows in cache between touches (about 7 % of a Newton iteration on a 2D
+  // block of 51 200 particles at delta = 3.015 dx, docs/performance.md).
+  std::vector<int> order_;
+  static std::vector<int> tileOrder(const LocalParticles& p) {
+    std::vector<int> o(p.numOwned);
+    std::iota(o.begin(), o.end(), 0);
+    double reach = 0;  // the longest bond
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    for (int i = 0; i < p.numOwned; ++i) {
+      lo = lo.cwiseMin(p.X[i]);
+      for (auto q = p.famOffset[i]; q < p.famOffset[i + 1]; ++q) reach = std::max(reach, (p.X[p.famIndex[q]] - p.X[i]).squaredNorm());
+    }
+    if (!(reach > 0)) return o;
+    const double edge = 8 * std::sqrt(reach);
+    std::vector<std::array<long long, 4>> key(p.numOwned);
+    for (int i = 0; i < p.numOwned; ++i) {
+      const Eigen::Vector3d c = (p.X[i] - lo) / edge;
+      key[i] = {static_cast<long long>(c[2]), static_cast<long long>(c[1]), static_cast<long long>(c[0]), i};
+    }
+    std::sort(key.begin(), key.end());
+    for (int i = 0; i < p.numOwned; ++i) o[i] = static_cast<int>(key[i][3]);
+    return o;
   }
 
   /// Fills the kinematics of particle i: bonds, K, K^-1, F, h_j.
@@ -214,7 +243,8 @@ struct ImplD final : Model::Impl {
     BondWork<D> w;
     std::vector<int> parts;
     std::vector<double> r, K;
-    for (int i = 0; i < p.numOwned; ++i) {
+    for (int ii = 0; ii < p.numOwned; ++ii) {
+      const int i = order_.size() == static_cast<std::size_t>(p.numOwned) ? order_[ii] : ii;
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
       const int m = w.m;

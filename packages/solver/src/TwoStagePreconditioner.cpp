@@ -172,11 +172,11 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
     auto* def = dynamic_cast<Thyra::DefaultPreconditioner<double>*>(prec);
     if (def == nullptr) throw std::logic_error("the Two-Stage preconditioner needs a Thyra::DefaultPreconditioner");
     def->initializeUnspecified(thyraM);
-    source_src_ = src;
+    source_src_ = src.create_weak();  // a weak reference: the factory must not keep the operator (and its matrix) alive
   }
   void uninitializePrec(Thyra::PreconditionerBase<double>* prec, RCP<const Thyra::LinearOpSourceBase<double>>* src,
                         Thyra::ESupportSolveUse* use) const override {
-    if (src) *src = source_src_;
+    if (src) *src = source_src_.is_valid_ptr() ? source_src_.create_strong() : Teuchos::null;
     if (use) *use = Thyra::SUPPORT_SOLVE_UNSPECIFIED;
     if (auto* def = dynamic_cast<Thyra::DefaultPreconditioner<double>*>(prec)) def->uninitialize();
   }

@@ -190,6 +190,10 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   PreconditionerMatrix precMatrixKind_ = PreconditionerMatrix::Assembled;
   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
   mutable Teuchos::RCP<TCrsMatrix> precA_;
+  // The last assembled W_op handed out: create_W_op gives it again once nobody else holds it (a
+  // Newton solve after the tangent predictor's, the next load step's), instead of allocating
+  // and zeroing a new matrix of the same graph (every evaluation overwrites its values).
+  mutable Teuchos::RCP<TCrsMatrix> spareW_;
   // The reaction norm of the last residual evaluation, with its state and load factor, kept
   // when no external force acts (only then do the convergence tests normalise by it): asked for
   // at the state NOX just evaluated, it then costs no second residual. Cleared when bonds break.

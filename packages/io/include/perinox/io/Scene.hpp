@@ -67,6 +67,8 @@ struct SolverSettings {
   double floorFactor = 2.0;          // see NewtonOptions::floorFactor             // extrapolate the previous increment to start each step
   int verbosity = 0;
   int stagnationStop = 0;            // > 0: stop a Newton solve whose residual has not halved in this many iterations
+  std::string forcingTerm = "Constant";  // NewtonOptions::forcingTerm
+  double linearTolerance = 1e-12;    // NewtonOptions::linearTolerance
   std::string continuation = "Load Stepping";  // or "Arc Length"
   struct ArcLength {
     double initial = 0.05;           // arc length of the first step (metric: see Scene.cpp)

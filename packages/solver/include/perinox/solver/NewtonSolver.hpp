@@ -27,6 +27,12 @@ struct NewtonOptions {
   int maxIterations = 25;
   std::string lineSearch = "Full Step";  // "Full Step", "Backtrack", "Polynomial"
   double linearTolerance = 1e-12;  // relative tolerance handed to iterative linear solvers
+  // How that tolerance is set per Newton iteration: "Constant" (linearTolerance every time) or
+  // "Eisenstat-Walker" (NOX's Type 2 forcing term: eta_k = 0.9 (|F_k| / |F_k-1|)^2, first 1e-4,
+  // never below linearTolerance nor above 1e-4: looser solves far from the solution, tight ones
+  // near it, so Newton keeps its quadratic rate for fewer Krylov iterations). Direct solvers
+  // solve exactly either way.
+  std::string forcingTerm = "Constant";
   int verbosity = 0;               // NOX's own output (0 = quiet)
   double floorFactor = 10.0;       // also converged when |R| <= floorFactor * roundoffScale (0: off)
   int stagnationStop = 0;          // > 0: stop early with "residual stagnation" when the residual
