@@ -380,6 +380,8 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
     j["preconditioner"] = {{"type", "Two-Stage"},
                            {"setups", facts.twoStage.setups},
                            {"hierarchies_built", facts.twoStage.hierarchiesBuilt},
+                           {"eigenvalue_products", facts.twoStage.eigenvalueProducts},
+                           {"operator_diagonals", facts.twoStage.operatorDiagonals},
                            {"levels", facts.twoStage.levels}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;

@@ -47,7 +47,9 @@ Teuchos::RCP<PeridynamicEvaluator> buildEvaluator(const Scene& scene, const Teuc
   JacobianChoice jacobian;
   if (s.jacobian != "Assembled" && s.method == "Newton") {
     jacobian.mode = s.jacobian == "Matrix-Free" ? JacobianMode::MatrixFree : JacobianMode::JacobianFree;
-    jacobian.matrix = s.preconditionerMatrix == "Assembled" ? PreconditionerMatrix::Assembled : PreconditionerMatrix::Neighbours;
+    jacobian.matrix = s.preconditionerMatrix == "Assembled"    ? PreconditionerMatrix::Assembled
+                      : s.preconditionerMatrix == "Neighbours" ? PreconditionerMatrix::Neighbours
+                                                               : PreconditionerMatrix::None;
     jacobian.jacobianFreeLambda = s.jfnkLambda;
   }
   return evaluatorWithSolver(comm, scene.problem, *s.linearSolver,
@@ -412,6 +414,7 @@ RunFacts runFacts(const PeridynamicEvaluator& evaluator, const Thyra::VectorBase
   facts.residualSeconds = residualSeconds(evaluator, x);
   if (auto wf = evaluator.get_W_factory())
     if (auto pf = wf->getPreconditionerFactory()) facts.twoStage = twoStageStatistics(*pf);
+  if (auto pf = evaluator.preconditionerFactory()) facts.twoStage = twoStageStatistics(*pf);
   measureFootprint(evaluator, *evaluator.comm(), facts);
   facts.ranks = evaluator.comm()->getSize();
   facts.segment = solved.segment;

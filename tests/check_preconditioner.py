@@ -7,7 +7,16 @@ not change (summary.json "preconditioner").
                                                        damage event (a break round, a step whose
                                                        bonds broke, a stall break) than the first
 
-Both also require one set-up per linear solve. Counts only.
+    check_preconditioner.py --eigenvalue-products FIRST WARM RUN_DIR
+                                                       matrix-free smoother: FIRST power iterations at
+                                                       the first set-up, WARM at each later one
+    check_preconditioner.py --own-diagonal RUN_DIR     the matrix-free smoother scaled by the operator's
+                                                       own diagonal at every set-up
+    check_preconditioner.py --krylov-within F REF_DIR RUN_DIR
+                                                       Krylov iterations per linear solve of RUN_DIR at
+                                                       most F times REF_DIR's
+
+All also require one set-up per linear solve. Counts only.
 """
 import argparse
 import json
@@ -17,8 +26,25 @@ import sys
 ap = argparse.ArgumentParser()
 ap.add_argument("--hierarchies", type=int)
 ap.add_argument("--damage", action="store_true")
-ap.add_argument("run")
+ap.add_argument("--eigenvalue-products", type=int, nargs=2, metavar=("FIRST", "WARM"))
+ap.add_argument("--krylov-within", type=float)
+ap.add_argument("--own-diagonal", action="store_true")
+ap.add_argument("runs", nargs="+")
 a = ap.parse_args()
+if len(a.runs) != (2 if a.krylov_within is not None else 1):
+    ap.error("give one run directory, or a reference and a run with --krylov-within")
+a.run = a.runs[-1]
+
+
+def per_solve(run):
+    with open(os.path.join(run, "summary.json")) as f:
+        t = json.load(f)
+    if t["linear_solves_total"] <= 0:
+        print(f"FAILED: {run} made no linear solve")
+        sys.exit(1)
+    return t["krylov_iterations_total"] / t["linear_solves_total"]
+
+
 with open(os.path.join(a.run, "summary.json")) as f:
     s = json.load(f)
 p = s.get("preconditioner")
@@ -41,5 +67,25 @@ if a.damage:
         sys.exit(1)
     if p["hierarchies_built"] > 1 + events:
         print(f"FAILED: {p['hierarchies_built']} hierarchies for {events} damage events")
+        sys.exit(1)
+if a.eigenvalue_products is not None:
+    first, warm = a.eigenvalue_products
+    want = first + warm * (p["setups"] - 1)
+    got = p.get("eigenvalue_products")
+    print(f"eigenvalue products {got}, expected {want}")
+    if got != want:
+        print("FAILED: the matrix-free smoother's power iterations are not warm-started as configured")
+        sys.exit(1)
+if a.own_diagonal:
+    got = p.get("operator_diagonals")
+    print(f"set-ups scaled by the operator's own diagonal {got} of {p['setups']}")
+    if got != p["setups"]:
+        print("FAILED: the smoother fell back to another diagonal")
+        sys.exit(1)
+if a.krylov_within is not None:
+    ref, run = per_solve(a.runs[0]), per_solve(a.run)
+    print(f"Krylov iterations per solve {run:.2f} against {ref:.2f} ({run / ref:.2f}x, at most {a.krylov_within}x)")
+    if run > a.krylov_within * ref:
+        print("FAILED: too many Krylov iterations per solve")
         sys.exit(1)
 print("PASSED")

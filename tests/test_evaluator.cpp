@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 
+#include "perinox/evaluator/JacobianOperators.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 
 using namespace perinox;
@@ -207,6 +208,21 @@ TEST_P(EvaluatorFD, MatrixFreeProductsMatchAssembledJacobian) {
     const double rel = Thyra::norm_2(*y) / refNorm;
     EXPECT_LT(rel, mode == JacobianMode::MatrixFree ? 1e-12 : 1e-4)
         << (mode == JacobianMode::MatrixFree ? "analytic" : "difference") << " product, dim " << c.dim;
+    if (mode == JacobianMode::MatrixFree) {
+      // Its diagonal, from the element tangents' diagonal blocks alone, is the assembled W's
+      // (round-off: the same terms summed in another order).
+      auto* own = dynamic_cast<const OperatorDiagonal*>(TOE::getConstTpetraOperator(op).get());
+      ASSERT_NE(own, nullptr);
+      TMultiVector d(W->getRowMap(), 1);
+      own->getDiagonal(d);
+      Tpetra::Vector<double, LO, GO> ref(W->getRowMap());
+      W->getLocalDiagCopy(ref);
+      ref.update(-1.0, *d.getVector(0), 1.0);
+      TMultiVector refAgain(W->getRowMap(), 1);
+      W->getLocalDiagCopy(*refAgain.getVectorNonConst(0));
+      ASSERT_GT(refAgain.getVector(0)->normInf(), 0.0);
+      EXPECT_LT(ref.normInf(), 1e-12 * refAgain.getVector(0)->normInf()) << "diagonal, dim " << c.dim;
+    }
     auto Wn = ev->assembledJacobian(*x, true);
     EXPECT_LT(Wn->getGlobalNumEntries(), W->getGlobalNumEntries());
   }

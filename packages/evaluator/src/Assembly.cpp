@@ -527,15 +527,45 @@ void Assembler::applyJacobian(const std::vector<double>& u, const double* v, dou
     }
   }
   agreeOnFailure(*comm_, failed, message, particle);
-  jvOwned_->doExport(*jvOverlap_, *dofs_.allExport, Tpetra::ADD);
-  auto jd = jvOwned_->getData();
-  LO k = 0;
-  for (int l = 0; l < lp.numOwned; ++l)
-    for (int c = 0; c < D; ++c)
-      if (ofl[l * D + c] >= 0) y[k++] = jd[l * D + c];
+  sumToOwnedFree(*jvOverlap_, *jvOwned_, y);
   for (const auto& [lid, value] : frozen.dofs) {
     (void)value;
     y[lid] = frozen.stiffness * v[lid];
+  }
+}
+
+void Assembler::sumToOwnedFree(const TVector& overlap, TVector& owned, double* y) const {
+  owned.doExport(overlap, *dofs_.allExport, Tpetra::ADD);
+  const int D = problem_.dim();
+  const int numOwned = model_.particles().numOwned;
+  const std::vector<int>& ofl = dofs_.overlapFreeLid;
+  auto od = owned.getData();
+  LO k = 0;
+  for (int l = 0; l < numOwned; ++l)
+    for (int c = 0; c < D; ++c)
+      if (ofl[l * D + c] >= 0) y[k++] = od[l * D + c];
+}
+
+void Assembler::jacobianDiagonal(const std::vector<double>& u, double* y, const FrozenDofs& frozen) const {
+  TVector dOv(dofs_.overlapAll), dOwned(dofs_.ownedAll);
+  int failed = 0;
+  std::string message;
+  long long particle = -1;
+  {
+    auto dd = dOv.getDataNonConst();
+    try {
+      model_.addJacobianDiagonal(u, dd.getRawPtr());
+    } catch (const EvaluationError& e) {
+      failed = 1;
+      message = e.what();
+      particle = e.particle();
+    }
+  }
+  agreeOnFailure(*comm_, failed, message, particle);
+  sumToOwnedFree(dOv, dOwned, y);
+  for (const auto& [lid, value] : frozen.dofs) {
+    (void)value;
+    y[lid] = frozen.stiffness;
   }
 }
 
@@ -571,6 +601,11 @@ void JacobianOperator::apply(const TMultiVector& X, TMultiVector& Y, Teuchos::ET
     auto yd = Y.getDataNonConst(k);
     for (size_t r = 0; r < n; ++r) yd[r] = (beta == 0.0 ? 0.0 : beta * yd[r]) + alpha * y[r];
   }
+}
+
+void JacobianOperator::getDiagonal(TMultiVector& d) const {
+  auto dd = d.getDataNonConst(0);
+  assembler_.jacobianDiagonal(u_, dd.getRawPtr(), frozen_);
 }
 
 void DifferenceJacobianOperator::setState(const Thyra::VectorBase<double>& x) {

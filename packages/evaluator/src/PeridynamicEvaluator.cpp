@@ -261,6 +261,10 @@ Teuchos::RCP<Thyra::PreconditionerBase<double>> PeridynamicEvaluator::create_W_p
 void PeridynamicEvaluator::setJacobian(JacobianMode mode, PreconditionerMatrix pm,
                                        Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory,
                                        double fdLambda) {
+  if (pm == PreconditionerMatrix::None && mode != JacobianMode::MatrixFree && !precFactory.is_null())
+    throw std::invalid_argument(
+        "PeridynamicEvaluator options: 'Preconditioner Matrix' = None hands the preconditioner the analytic "
+        "matrix-free Jacobian: it needs 'Jacobian' = Matrix-Free");
   mode_ = mode;
   fdLambda_ = fdLambda;
   precMatrixKind_ = pm;
@@ -283,9 +287,10 @@ Teuchos::RCP<const Teuchos::ParameterList> PeridynamicEvaluator::getValidParamet
         Teuchos::tuple<int>(0, 1, 2), l.get());
     Teuchos::setStringToIntegralParameter<int>(
         "Preconditioner Matrix", "Assembled", "matrix-free modes: what W_prec is built from",
-        Teuchos::tuple<std::string>("Assembled", "Neighbours"),
-        Teuchos::tuple<std::string>("the assembled Jacobian", "its couplings within one horizon"), Teuchos::tuple<int>(0, 1),
-        l.get());
+        Teuchos::tuple<std::string>("Assembled", "Neighbours", "None"),
+        Teuchos::tuple<std::string>("the assembled Jacobian", "its couplings within one horizon",
+                                    "no matrix: the preconditioner is given the matrix-free Jacobian operator (Two-Stage)"),
+        Teuchos::tuple<int>(0, 1, 2), l.get());
     l->set("Jacobian-Free Lambda", 1e-6, "Jacobian-free: the step h |v|_inf = lambda max(|x|_inf, dx) (> 0)");
     return l;
   }();
@@ -313,7 +318,9 @@ void PeridynamicEvaluator::setJacobian(const Teuchos::ParameterList& options,
   const int mode = Teuchos::getIntegralValue<int>(l, "Jacobian");
   const int pm = Teuchos::getIntegralValue<int>(l, "Preconditioner Matrix");
   setJacobian(mode == 0 ? JacobianMode::Assembled : (mode == 1 ? JacobianMode::MatrixFree : JacobianMode::JacobianFree),
-              pm == 0 ? PreconditionerMatrix::Assembled : PreconditionerMatrix::Neighbours, precFactory, fd);
+              pm == 0 ? PreconditionerMatrix::Assembled
+                      : (pm == 1 ? PreconditionerMatrix::Neighbours : PreconditionerMatrix::None),
+              precFactory, fd);
 }
 
 Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> PeridynamicEvaluator::rigidBodyModes() const {
@@ -389,7 +396,16 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
   const auto Wop = out.get_W_op();
   Teuchos::RCP<Thyra::PreconditionerBase<double>> Wprec;
   if (out.supports(MEB::OUT_ARG_W_prec)) Wprec = out.get_W_prec();
-  if (!Wprec.is_null()) {
+  if (!Wprec.is_null() && precMatrixKind_ == PreconditionerMatrix::None) {
+    // No matrix: the preconditioner (Two-Stage) gets the matrix-free Jacobian at x. It shares
+    // the model's kept linearisation with W_op, so the state is linearised once.
+    if (precJ_.is_null()) precJ_ = Teuchos::rcp(new JacobianOperator(*assembler_, damage_->frozen(), dofs_.ownedFree));
+    precJ_->setState(localDisplacements(*x));
+    precA_ = Teuchos::null;
+    auto op = Thyra::createConstLinearOp<double, LO, GO, Node>(
+        Teuchos::rcp_implicit_cast<const Tpetra::Operator<double, LO, GO, Node>>(precJ_), xSpace_, xSpace_);
+    precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
+  } else if (!Wprec.is_null()) {
     // The preconditioner: Ifpack2 or MueLu on the assembled Jacobian or on its part that
     // couples direct neighbours only (memory proportional to the family size).
     precA_ = assembledJacobian(*x, precMatrixKind_ == PreconditionerMatrix::Neighbours);

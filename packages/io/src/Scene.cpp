@@ -500,6 +500,7 @@ void solverSchema(ParameterList& so) {
              {"Preset", "as the linear solver preset says; Assembled if it says nothing"}});
   setChoice(so, "Preconditioner Matrix", "Preset",
             {{"Assembled", "the full Jacobian"}, {"Neighbours", "only couplings within one horizon; memory proportional to the family size"},
+             {"None", "no matrix: the Two-Stage preconditioner (scalable) smooths with the matrix-free Jacobian itself"},
              {"Preset", "as the preset says; Neighbours if it says nothing"}},
             "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: ");
   setNumber(so, "Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)",
@@ -1806,8 +1807,17 @@ void readLinearSolver(SceneBuild& b) {
     fail(file, "'Solver/Jacobian' must be Assembled, Matrix-Free, Jacobian-Free or Preset (got '" + s.jacobian + "')");
   s.preconditionerMatrix = so.get<std::string>("Preconditioner Matrix");
   if (s.preconditionerMatrix == "Preset") s.preconditionerMatrix = presetPrecMatrix;
-  if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours")
-    fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours or Preset (got '" + s.preconditionerMatrix + "')");
+  if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours" && s.preconditionerMatrix != "None")
+    fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours, None or Preset (got '" + s.preconditionerMatrix + "')");
+  if (s.preconditionerMatrix == "None" && s.jacobian != "Assembled") {
+    if (s.jacobian != "Matrix-Free")
+      fail(file, "'Solver/Preconditioner Matrix' = None hands the preconditioner the analytic matrix-free Jacobian: it needs "
+                 "'Solver/Jacobian' = Matrix-Free (got '" + s.jacobian + "')");
+    if (s.linearSolver->get<std::string>("Preconditioner Type", "None") != "Two-Stage")
+      fail(file, "'Solver/Preconditioner Matrix' = None needs a preconditioner that works without a matrix: the preset '" +
+                     s.linearSolverName + "' uses '" + s.linearSolver->get<std::string>("Preconditioner Type", "None") +
+                     "'; use the scalable preset (Two-Stage)");
+  }
   if (s.forcingTerm == "Preset") s.forcingTerm = presetForcing;
   if (s.forcingTerm != "Constant" && s.forcingTerm != "Eisenstat-Walker")
     fail(file, "the linear solver preset's 'Forcing Term' must be Constant or Eisenstat-Walker (got '" + s.forcingTerm + "')");

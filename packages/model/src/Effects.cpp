@@ -38,11 +38,11 @@ void addPiolaForceStates(BondWork<D>& w, const MatD<D>& P, const TangentD<D>* A,
   for (int j = 0; j < w.m; ++j) {
     if (!in(j)) continue;
     for (int a = 0; a < D; ++a) M.row(a) = h[j].transpose() * A->template block<D, D * D>(a * D, 0);
-    for (int k = 0; k <= w.m; ++k) {
-      if (k > 0 && !in(k - 1)) continue;
+    w.forColumns(j, [&](int k) {
+      if (k > 0 && !in(k - 1)) return;
       const typename BondWork<D>::Vec gk = k == 0 ? (-gsum).eval() : (w.Vj[k - 1] * h[k - 1]).eval();
       for (int c = 0; c < D; ++c) w.dT(j, k).col(c).noalias() += M.template block<D, D>(0, c * D) * gk;
-    }
+    });
   }
 }
 
@@ -161,12 +161,12 @@ void StabilizationEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   if (!tangent) return;
   // dT_j/du_k = c [ (delta_{k,j} - delta_{k,i}) - g_k . xi_j ] I
   for (int j = 0; j < w.m; ++j) {
-    for (int k = 0; k <= w.m; ++k) {
+    w.forColumns(j, [&](int k) {
       double s = -w.g(k).dot(w.xi[j]);
       if (k == 0) s -= 1.0;
       if (k == j + 1) s += 1.0;
       w.dT(j, k).diagonal().array() += c * s;
-    }
+    });
   }
 }
 
@@ -191,10 +191,11 @@ void ControlEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   }
   for (int j = 0; j < w.m; ++j) w.t[j].noalias() += spec_.C * avg;
   if (!tangent) return;
-  for (int j = 0; j < w.m; ++j) {
-    for (int l = 0; l < w.m; ++l) w.dT(j, l + 1).diagonal().array() += spec_.C * w.Vj[l];
-    w.dT(j, 0).diagonal().array() -= spec_.C * vsum;
-  }
+  for (int j = 0; j < w.m; ++j)
+    w.forColumns(j, [&](int k) {
+      if (k > 0) w.dT(j, k).diagonal().array() += spec_.C * w.Vj[k - 1];
+      else w.dT(j, 0).diagonal().array() -= spec_.C * vsum;
+    });
 }
 
 template <int D>

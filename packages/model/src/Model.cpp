@@ -48,6 +48,7 @@ struct Model::Impl {
   virtual std::vector<std::string> names() const = 0;
   virtual void applyTangent(const Model& m, const std::vector<double>& u, const std::vector<double>& v,
                             double* jv) const = 0;
+  virtual void addDiagonal(const Model& m, const std::vector<double>& u, double* d) const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
   virtual void invalidate() = 0;
 };
@@ -79,7 +80,7 @@ struct ImplD final : Model::Impl {
       double Ts, dTs;
       bondSoftening(model.bondDamage(w.i, w.nbr[j]), (ly - lx) / lx, Ts, dTs);
       if (tangent) {
-        for (int k = 0; k <= w.m; ++k) w.dT(j, k) *= Ts;
+        w.forColumns(j, [&](int k) { w.dT(j, k) *= Ts; });
         if (dTs != 0.0 && ly > 0) {
           const Vec dsdu = w.Y[j] / (ly * lx);
           const Mat B = dTs * w.t[j] * dsdu.transpose();
@@ -237,6 +238,21 @@ struct ImplD final : Model::Impl {
     }
   }
 
+  /// Every effect's force states of particle w.i (and their derivatives), softened by damage.
+  void addForces(const Model& model, BondWork<D>& w, bool tangent) const {
+    try {
+      for (const auto& e : effects) e->addForces(w, tangent);
+    } catch (const EvaluationError& e) {
+      // Effects know local ids only; name the particle by its global id and position.
+      const LocalParticles& p = model.particles();
+      const long long g = p.globalId[w.i];
+      std::ostringstream msg;
+      msg << e.what() << " at particle " << g << " (X = " << p.X[w.i].head(D).transpose() << ")";
+      throw EvaluationError(msg.str(), g);
+    }
+    if (damage) soften(*damage, w, tangent);
+  }
+
   void evaluate(const Model& model, const std::vector<double>& u, ElementSink& sink,
                 bool tangent) const override {
     const LocalParticles& p = model.particles();
@@ -249,16 +265,7 @@ struct ImplD final : Model::Impl {
       kinematics(p, u, i, w);
       const int m = w.m;
       if (tangent) w.tan.assign(static_cast<std::size_t>(m) * (m + 1), Mat::Zero());
-      try {
-        for (const auto& e : effects) e->addForces(w, tangent);
-      } catch (const EvaluationError& e) {
-        // Effects know local ids only; name the particle by its global id and position.
-        const long long g = p.globalId[i];
-        std::ostringstream msg;
-        msg << e.what() << " at particle " << g << " (X = " << p.X[i].head(D).transpose() << ")";
-        throw EvaluationError(msg.str(), g);
-      }
-      if (damage) soften(*damage, w, tangent);
+      addForces(model, w, tangent);
 
       const int n = m + 1;
       parts.resize(n);
@@ -289,6 +296,31 @@ struct ImplD final : Model::Impl {
         }
       }
       sink.add(parts.data(), n, r.data(), tangent ? K.data() : nullptr);
+    }
+  }
+
+  /// The element tangents' diagonal blocks, as evaluate() would form them (same effects, same
+  /// softening), each dT(l, k) only for k = i and k = member l: K_ii = -sum_l s_l dT(l, 0),
+  /// K_jj = s_l dT(l, l + 1) for member j = nbr[l], s_l = V_i V_l.
+  void addDiagonal(const Model& model, const std::vector<double>& u, double* d) const override {
+    const LocalParticles& p = model.particles();
+    BondWork<D> w;
+    w.diagonalOnly = true;
+    for (int ii = 0; ii < p.numOwned; ++ii) {
+      const int i = order_.size() == static_cast<std::size_t>(p.numOwned) ? order_[ii] : ii;
+      if (model.detached(i)) continue;
+      kinematics(p, u, i, w);
+      w.tan.assign(static_cast<std::size_t>(2 * w.m), Mat::Zero());
+      addForces(model, w, true);
+      for (int l = 0; l < w.m; ++l) {
+        const double s = w.Vi * w.Vj[l];
+        const Mat& Bi = w.dT(l, 0);
+        const Mat& Bj = w.dT(l, l + 1);
+        for (int a = 0; a < D; ++a) {
+          d[i * D + a] -= s * Bi(a, a);
+          d[w.nbr[l] * D + a] += s * Bj(a, a);
+        }
+      }
     }
   }
 
@@ -552,6 +584,8 @@ void Model::evaluate(const std::vector<double>& u, ElementSink& sink, bool wantT
 void Model::applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const {
   impl_->applyTangent(*this, u, v, jv);
 }
+
+void Model::addJacobianDiagonal(const std::vector<double>& u, double* d) const { impl_->addDiagonal(*this, u, d); }
 
 std::vector<ParticleOutput> Model::outputs(const std::vector<double>& u) const {
   return impl_->outputs(*this, u);

@@ -57,7 +57,7 @@ Teuchos::RCP<PeridynamicEvaluator> evaluatorWithSolver(const Teuchos::RCP<const 
     throw std::invalid_argument("'" + solverFile + "': '" + key + "' = '" + v + "' is not one of the evaluator's choices");
   };
   const int mode = take("Jacobian", {"Assembled", "Matrix-Free", "Jacobian-Free"});
-  const int matrix = take("Preconditioner Matrix", {"Assembled", "Neighbours"});
+  const int matrix = take("Preconditioner Matrix", {"Assembled", "Neighbours", "None"});
   if (mode >= 0) choice.mode = static_cast<JacobianMode>(mode);
   if (matrix >= 0) choice.matrix = static_cast<PreconditionerMatrix>(matrix);
   return evaluatorWithSolver(comm, std::move(problem), *linear, "'" + solverFile + "'", choice);

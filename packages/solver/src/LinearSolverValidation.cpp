@@ -228,7 +228,7 @@ class Checker {
         if (!e.isType<std::string>()) fail("'" + key + "' must be of type string, not " + typeName(e));
         const std::vector<std::string> allowed =
             name == "Jacobian" ? std::vector<std::string>{"Assembled", "Matrix-Free", "Jacobian-Free"}
-                               : std::vector<std::string>{"Assembled", "Neighbours"};
+                               : std::vector<std::string>{"Assembled", "Neighbours", "None"};
         const std::string& value = Teuchos::getValue<std::string>(e);
         if (std::find(allowed.begin(), allowed.end(), value) == allowed.end())
           failWithHint("'" + key + "' = '" + value + "' is not one of " + joined(allowed), value, allowed, "allowed");

@@ -5,6 +5,7 @@
 #include <Thyra_DetachedVectorView.hpp>
 #include <Thyra_LinearOpWithSolveFactoryHelpers.hpp>
 #include <Thyra_MultiVectorBase.hpp>
+#include <Thyra_PreconditionerBase.hpp>
 #include <Thyra_VectorStdOps.hpp>
 #include <algorithm>
 #include <chrono>
@@ -494,8 +495,19 @@ std::string LoadStepper::tangent(const Thyra::VectorBase<double>& x, Thyra::Vect
     in.set_x(Teuchos::rcpFromRef(x));
     auto out = model_->createOutArgs();
     out.set_W_op(W);
+    // A model that builds its own preconditioner (matrix-free W_op) gives it here as to Newton:
+    // without it the Krylov solve of the tangent would run unpreconditioned.
+    Teuchos::RCP<Thyra::PreconditionerBase<double>> prec;
+    if (out.supports(Thyra::ModelEvaluatorBase::OUT_ARG_W_prec)) prec = model_->create_W_prec();
+    if (!prec.is_null()) out.set_W_prec(prec);
     model_->evalModel(in, out);
-    auto lows = Thyra::linearOpWithSolve(*model_->get_W_factory(), W.getConst());
+    Teuchos::RCP<Thyra::LinearOpWithSolveBase<double>> lows;
+    if (prec.is_null()) {
+      lows = Thyra::linearOpWithSolve(*model_->get_W_factory(), W.getConst());
+    } else {
+      lows = model_->get_W_factory()->createOp();
+      Thyra::initializePreconditionedOp<double>(*model_->get_W_factory(), W.getConst(), prec.getConst(), lows.ptr());
+    }
     Thyra::scale(-1.0, dfdl.ptr());
     Thyra::assign(Teuchos::ptrFromRef(z), 0.0);
     Thyra::SolveCriteria<double> crit;

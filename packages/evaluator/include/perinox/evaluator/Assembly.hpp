@@ -95,10 +95,17 @@ class Assembler {
                                       const FrozenDofs& frozen) const;
   /// y = (df/dx) v on the owned free DOFs, linearised at the local displacements u.
   void applyJacobian(const std::vector<double>& u, const double* v, double* y, const FrozenDofs& frozen) const;
+  /// The diagonal of that operator on the owned free DOFs (y, their local order), from the
+  /// element tangents' diagonal blocks: no matrix formed.
+  void jacobianDiagonal(const std::vector<double>& u, double* y, const FrozenDofs& frozen) const;
   /// Bytes held by the sparse matrices built so far (owned and ghost rows; values, indices, rows).
   std::size_t matrixBytes() const;
 
  private:
+  /// Sums an overlap vector (owned and ghost particles, all DOFs) onto the owners (owned: the
+  /// Export's target, its owned entries come from the overlap's own) and copies the owned free
+  /// DOFs' sums to y in their local order.
+  void sumToOwnedFree(const TVector& overlap, TVector& owned, double* y) const;
   JacobianGraphs buildGraphs(bool neighbours) const;
   Teuchos::RCP<TCrsGraph> buildOwnedGraph(bool neighbours) const;
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "perinox/evaluator/Assembly.hpp"
+#include "perinox/evaluator/OperatorDiagonal.hpp"
 
 namespace perinox {
 
@@ -15,7 +16,7 @@ using TMultiVector = Tpetra::MultiVector<double, LO, GO>;
 
 /// The analytic matrix-free Jacobian: W v = (df_int/du) v from the linearised kernels at the state
 /// set by the last evaluation with W_op (its displacements are kept; nothing is assembled).
-class JacobianOperator final : public TOperator {
+class JacobianOperator final : public TOperator, public OperatorDiagonal {
  public:
   JacobianOperator(const Assembler& assembler, const FrozenDofs& frozen, Teuchos::RCP<const TMap> map)
       : assembler_(assembler), frozen_(frozen), map_(std::move(map)) {}
@@ -25,6 +26,8 @@ class JacobianOperator final : public TOperator {
   /// The local displacements (owned and ghost particles) to linearise at.
   void setState(std::vector<double> u) { u_ = std::move(u); }
   void apply(const TMultiVector& X, TMultiVector& Y, Teuchos::ETransp mode, double alpha, double beta) const override;
+  /// diag(W) at the state, from the element tangents' diagonal blocks (no matrix formed).
+  void getDiagonal(TMultiVector& d) const override;
 
  private:
   const Assembler& assembler_;

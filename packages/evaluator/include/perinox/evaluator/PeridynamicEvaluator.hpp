@@ -24,9 +24,13 @@ namespace perinox {
 /// product (linearised kernels, nothing assembled); or finite differences of f (Jacobian-free,
 /// built by the Newton solver around this evaluator).
 enum class JacobianMode { Assembled, MatrixFree, JacobianFree };
-/// The matrix a matrix-free solve's preconditioner is built from: the assembled Jacobian, or its
-/// part that couples particles within one horizon (memory proportional to the family size).
-enum class PreconditionerMatrix { Assembled, Neighbours };
+/// The matrix a matrix-free solve's preconditioner is built from: the assembled Jacobian, its
+/// part that couples particles within one horizon (memory proportional to the family size), or
+/// none: the preconditioner is handed the matrix-free Jacobian operator itself (the Two-Stage
+/// preconditioner, which needs only J v products and its auxiliary matrix).
+enum class PreconditionerMatrix { Assembled, Neighbours, None };
+
+class JacobianOperator;
 
 class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
  public:
@@ -62,12 +66,14 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   void setJacobian(JacobianMode mode, PreconditionerMatrix pm,
                    Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory, double fdLambda = 1e-6);
   /// The evaluator's own options, as a list: "Jacobian" (Assembled, Matrix-Free, Jacobian-Free),
-  /// "Preconditioner Matrix" (Assembled, Neighbours), "Jacobian-Free Lambda" (> 0). Everything
+  /// "Preconditioner Matrix" (Assembled, Neighbours, None), "Jacobian-Free Lambda" (> 0). Everything
   /// else (the linear solver, the preconditioner) is injected as a Stratimikos factory.
   static Teuchos::RCP<const Teuchos::ParameterList> getValidParameters();
   /// setJacobian from such a list (validated: std::invalid_argument, one sentence naming the key).
   void setJacobian(const Teuchos::ParameterList& options, Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory);
   JacobianMode jacobianMode() const { return mode_; }
+  /// The preconditioner factory a matrix-free mode builds W_prec with (null otherwise).
+  Teuchos::RCP<const Thyra::PreconditionerFactoryBase<double>> preconditionerFactory() const { return precFactory_; }
   Teuchos::RCP<Thyra::PreconditionerBase<double>> create_W_prec() const override;
   /// W at x assembled, whatever the Jacobian mode (for diagnostics, the explicit solver, and
   /// preconditioners); neighbours keeps only couplings within one horizon.
@@ -190,6 +196,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   PreconditionerMatrix precMatrixKind_ = PreconditionerMatrix::Assembled;
   Teuchos::RCP<Thyra::PreconditionerFactoryBase<double>> precFactory_;
   mutable Teuchos::RCP<TCrsMatrix> precA_;
+  // Preconditioner Matrix = None: the matrix-free Jacobian the preconditioner is given.
+  mutable Teuchos::RCP<JacobianOperator> precJ_;
   // The last assembled W_op handed out: create_W_op gives it again once nobody else holds it (a
   // Newton solve after the tangent predictor's, the next load step's), instead of allocating
   // and zeroing a new matrix of the same graph (every evaluation overwrites its values).

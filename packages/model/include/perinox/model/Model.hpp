@@ -73,7 +73,20 @@ struct BondWork {
   // Outputs accumulated by the effects:
   std::vector<Vec> t;          // T_i<xi_ij>, j = 0..m-1
   std::vector<Mat> tan;        // dT_ij/du_k, index j*(m+1) + k; k = 0 is particle i, k = 1+l member l
-  Mat& dT(int j, int k) { return tan[j * (m + 1) + k]; }
+  // With diagonalOnly, tan holds only dT(j, 0) and dT(j, j + 1) (index 2j and 2j + 1): all the
+  // element's diagonal blocks need (Model::addJacobianDiagonal).
+  bool diagonalOnly = false;
+  Mat& dT(int j, int k) { return diagonalOnly ? tan[2 * j + (k == 0 ? 0 : 1)] : tan[j * (m + 1) + k]; }
+  /// Calls f(k) for every k an effect's loop over dT(j, k) must fill: 0..m, or only 0 and j + 1.
+  template <class F>
+  void forColumns(int j, F&& f) const {
+    if (diagonalOnly) {
+      f(0);
+      f(j + 1);
+    } else {
+      for (int k = 0; k <= m; ++k) f(k);
+    }
+  }
   /// dF/du_k = e_c (x) g_k: g_0 = -sum_l V_l h_l, g_{1+l} = V_l h_l.
   Vec g(int k) const;
   Vec gsum;                    // sum_l V_l h_l (so g_0 = -gsum)
@@ -250,6 +263,11 @@ class Model {
   /// (local particles * dim, interleaved, like u and v). The element tangents are never formed:
   /// each effect linearises its force states along v. Detached particles are skipped.
   void applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const;
+
+  /// Adds the diagonal of df_int/du, summed over the owned elements, to d (local particles *
+  /// dim, interleaved): the element tangents' diagonal blocks only, O(family) work per element
+  /// instead of O(family^2) (Jacobi scaling of smoothers on the matrix-free Jacobian).
+  void addJacobianDiagonal(const std::vector<double>& u, double* d) const;
 
   /// F and Cauchy stress of the owned particles at u.
   std::vector<ParticleOutput> outputs(const std::vector<double>& u) const;

@@ -13,6 +13,12 @@
 // rows) so that MueLu sees a constant block size; the preconditioner restricts it to J's free
 // DOFs. An AuxiliarySource supplies A; this header knows no peridynamics (a host application may
 // supply its own).
+//
+// J is either an assembled Tpetra::CrsMatrix (S is then an Ifpack2 smoother on it) or any
+// Tpetra::Operator, e.g. the matrix-free Jacobian (S is then a Chebyshev iteration on that
+// operator scaled by J's diagonal when the operator gives it, perinox::OperatorDiagonal, else by
+// A's diagonal on J's rows; its largest eigenvalue found by the power method and warm-started
+// between set-ups): nothing of J's size is stored.
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_PreconditionerFactoryBase.hpp>
@@ -61,6 +67,8 @@ inline const char* twoStageName() { return "Two-Stage"; }
 ///   "Fine Smoother" (string, an Ifpack2 type, default CHEBYSHEV) and its "Fine Smoother
 ///   Parameters" (Ifpack2 list; default Chebyshev degree 2, eigenvalue ratio 7);
 ///   "MueLu" (MueLu's list for the hierarchy of A);
+///   "Warm Eigenvalue Iterations" (operator J: power
+///   iterations at each set-up after the first, default 3);
 ///   "Auxiliary Operator" (Auto | Lattice FEM | Short Horizon) and "Auxiliary Horizon Factor"
 ///   (for Short Horizon), read by whoever builds the source (makeAuxiliarySource).
 /// Without a source (e.g. for validation), set-up throws a sentence saying what is missing.
@@ -85,6 +93,10 @@ Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
 /// Statistics of the factory's set-ups (for tests and reports): hierarchies built and reused.
 struct TwoStageStatistics {
   long long setups = 0, hierarchiesBuilt = 0;
+  /// Products with J the power method took for the matrix-free smoother's eigenvalue estimates.
+  long long eigenvalueProducts = 0;
+  /// Set-ups that scaled it by the operator's own diagonal (OperatorDiagonal), not A's.
+  long long operatorDiagonals = 0;
   int levels = 0;
 };
 /// The statistics of a factory made by twoStagePreconditionerFactory (zeros for another one).
