@@ -501,7 +501,7 @@ void solverSchema(ParameterList& so) {
   setChoice(so, "Preconditioner Matrix", "Preset",
             {{"Assembled", "the full Jacobian"}, {"Neighbours", "only couplings within one horizon; memory proportional to the family size"},
              {"None", "no matrix: the Two-Stage preconditioner (scalable) smooths with the matrix-free Jacobian itself"},
-             {"Preset", "as the preset says; Neighbours if it says nothing"}},
+             {"Preset", "as the preset says (a preset's None is Neighbours for a Jacobian-free run); Neighbours if it says nothing"}},
             "matrix-free and Jacobian-free solves: the matrix the preconditioner is built from: ");
   setNumber(so, "Jacobian-Free Perturbation", 1e-6, "Jacobian-free: J v = (f(x + h v) - f(x)) / h with h |v|_inf = lambda max(|x|_inf, particle spacing)",
             reals(End::Open, 0, 1e-2, End::Open));
@@ -1806,7 +1806,11 @@ void readLinearSolver(SceneBuild& b) {
   if (s.jacobian != "Assembled" && s.jacobian != "Matrix-Free" && s.jacobian != "Jacobian-Free")
     fail(file, "'Solver/Jacobian' must be Assembled, Matrix-Free, Jacobian-Free or Preset (got '" + s.jacobian + "')");
   s.preconditionerMatrix = so.get<std::string>("Preconditioner Matrix");
-  if (s.preconditionerMatrix == "Preset") s.preconditionerMatrix = presetPrecMatrix;
+  if (s.preconditionerMatrix == "Preset") {
+    // A preset's None (scalable: the matrix-free Jacobian itself) means nothing to a
+    // Jacobian-free run, which has no analytic operator to hand over: its neighbour matrix then.
+    s.preconditionerMatrix = presetPrecMatrix == "None" && s.jacobian == "Jacobian-Free" ? "Neighbours" : presetPrecMatrix;
+  }
   if (s.preconditionerMatrix != "Assembled" && s.preconditionerMatrix != "Neighbours" && s.preconditionerMatrix != "None")
     fail(file, "'Solver/Preconditioner Matrix' must be Assembled, Neighbours, None or Preset (got '" + s.preconditionerMatrix + "')");
   if (s.preconditionerMatrix == "None" && s.jacobian != "Assembled") {

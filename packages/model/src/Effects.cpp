@@ -63,6 +63,11 @@ MatD<D> contract(const TangentD<D>& A, const MatD<D>& dF) {
 
 template <int D>
 void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
+  if (!w.forcesWanted) {  // a repeated product: dt only, from the kept A(F)
+    const MatD<D> dP = contract<D>(Eigen::Map<const TangentD<D>>(w.cache + D * D), w.dF);
+    for (int l = 0; l < w.m; ++l) w.dt[l].noalias() += dP * w.h[l];
+    return;
+  }
   MatD<D> P;
   TangentD<D> A;
   if (w.cache && !w.cacheFresh) {  // the state of the previous product: P(F) and A(F) kept
@@ -89,7 +94,7 @@ void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
   const StabilizationSpec& st = spec(w.i);
   const double c = st.G * st.C * w.Vi / w0;
   for (int j = 0; j < w.m; ++j) {
-    w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
+    if (w.forcesWanted) w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
     w.dt[j].noalias() += c * (w.dY[j] - w.dF * w.xi[j]);
   }
 }
@@ -99,18 +104,18 @@ void ControlEffect<D>::addDirectional(BondWork<D>& w) const {
   using Vec = typename BondWork<D>::Vec;
   if (spec_.kind == ControlSpec::Kind::Springs) {
     for (int j = 0; j < w.m; ++j) {
-      w.t[j].noalias() += spec_.C * (w.Y[j] - w.xi[j]);
+      if (w.forcesWanted) w.t[j].noalias() += spec_.C * (w.Y[j] - w.xi[j]);
       w.dt[j].noalias() += spec_.C * w.dY[j];
     }
     return;
   }
   Vec avg = Vec::Zero(), davg = Vec::Zero();
   for (int l = 0; l < w.m; ++l) {
-    avg += w.Vj[l] * (w.Y[l] - w.xi[l]);
+    if (w.forcesWanted) avg += w.Vj[l] * (w.Y[l] - w.xi[l]);
     davg += w.Vj[l] * w.dY[l];
   }
   for (int j = 0; j < w.m; ++j) {
-    w.t[j].noalias() += spec_.C * avg;
+    if (w.forcesWanted) w.t[j].noalias() += spec_.C * avg;
     w.dt[j].noalias() += spec_.C * davg;
   }
 }

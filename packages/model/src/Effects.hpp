@@ -20,6 +20,7 @@ class CorrespondenceEffect final : public ForceEffect<D> {
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
   int cacheSize() const override { return D * D + D * D * D * D; }  // P and A = dP/dF
+  bool directionalFromCache() const override { return true; }
 
  private:
   const Material& material(int i) const { return index_.empty() ? materials_.front() : materials_[index_[i]]; }
@@ -38,6 +39,7 @@ class ControlEffect final : public ForceEffect<D> {
   }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
+  bool directionalFromCache() const override { return true; }
 
  private:
   ControlSpec spec_;
@@ -85,6 +87,7 @@ class StabilizationEffect final : public ForceEffect<D> {
   const char* name() const override { return "stabilization"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
+  bool directionalFromCache() const override { return true; }
 
  private:
   const StabilizationSpec& spec(int i) const { return index_.empty() ? specs_.front() : specs_[index_[i]]; }

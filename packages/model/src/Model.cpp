@@ -109,6 +109,7 @@ struct ImplD final : Model::Impl {
   // effect, cacheSize() doubles per owned particle.
   mutable std::vector<double> linU_;
   mutable std::vector<std::vector<double>> linCache_;
+  mutable std::vector<Mat> linKinv_;  // K^-1 per owned particle at that state (shape only: kept while the bonds are)
   mutable bool linValid_ = false;
   void invalidate() override { linValid_ = false; }
 
@@ -123,11 +124,22 @@ struct ImplD final : Model::Impl {
       for (std::size_t e = 0; e < effects.size(); ++e)
         linCache_[e].resize(static_cast<std::size_t>(p.numOwned) * effects[e]->cacheSize());
     }
+    if (fresh) linKinv_.assign(p.numOwned, Mat::Zero());
+    // A repeated product without damage needs no force states: the effects that can then work
+    // from their cache get only xi, V_j, h (from the kept K^-1) and dY (about half the work).
+    const bool lite = !fresh && !damage &&
+                      std::all_of(effects.begin(), effects.end(), [](const auto& e) { return e->directionalFromCache(); });
     BondWork<D> w;
     w.cacheFresh = fresh;
+    w.forcesWanted = !lite;
     for (int i = 0; i < p.numOwned; ++i) {
       if (model.detached(i)) continue;
-      kinematics(p, u, i, w);
+      if (lite) {
+        bondsOnly(p, i, linKinv_[i], w);
+      } else {
+        kinematics(p, u, i, w);
+        if (fresh) linKinv_[i] = w.Kinv;
+      }
       w.dY.resize(w.m);
       w.dt.assign(w.m, Vec::Zero());
       w.dF.setZero();
@@ -203,18 +215,34 @@ struct ImplD final : Model::Impl {
     return o;
   }
 
-  /// Fills the kinematics of particle i: bonds, K, K^-1, F, h_j.
-  static void kinematics(const LocalParticles& p, const std::vector<double>& u, int i,
-                         BondWork<D>& w) {
+  /// Particle i's family in w: id, size, members, volume; xi, h and V_j sized.
+  static void family(const LocalParticles& p, int i, BondWork<D>& w) {
     const auto b = p.famOffset[i];
     w.i = i;
     w.m = static_cast<int>(p.famOffset[i + 1] - b);
     w.nbr = p.famIndex.data() + b;
     w.Vi = p.volume[i];
     w.xi.resize(w.m);
-    w.Y.resize(w.m);
     w.h.resize(w.m);
     w.Vj.resize(w.m);
+  }
+
+  /// The reference bonds of particle i with h_j = K^-1 xi_j from a kept K^-1 (no Y, F or t).
+  static void bondsOnly(const LocalParticles& p, int i, const Mat& Kinv, BondWork<D>& w) {
+    family(p, i, w);
+    for (int l = 0; l < w.m; ++l) {
+      const int j = w.nbr[l];
+      for (int a = 0; a < D; ++a) w.xi[l][a] = p.X[j][a] - p.X[i][a];
+      w.h[l] = Kinv * w.xi[l];
+      w.Vj[l] = p.volume[j];
+    }
+  }
+
+  /// Fills the kinematics of particle i: bonds, K, K^-1, F, h_j.
+  static void kinematics(const LocalParticles& p, const std::vector<double>& u, int i,
+                         BondWork<D>& w) {
+    family(p, i, w);
+    w.Y.resize(w.m);
     w.t.assign(w.m, Vec::Zero());
     Vec ui;
     for (int a = 0; a < D; ++a) ui[a] = u[i * D + a];

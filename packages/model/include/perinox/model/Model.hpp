@@ -99,6 +99,9 @@ struct BondWork {
   // it when cacheFresh and reading it otherwise.
   double* cache = nullptr;
   bool cacheFresh = false;
+  // False in a repeated product at a kept state without damage: the effects then add only dt
+  // (the force states t are not asked for), and the model has filled xi, Vj, h and dY only.
+  bool forcesWanted = true;
 };
 
 /// One effect: adds its bond force states (and their derivatives) for particle i.
@@ -116,6 +119,9 @@ class ForceEffect {
   virtual void addDirectional(BondWork<D>& w) const = 0;
   /// Doubles per particle this effect keeps between matrix-free products at one state (0: none).
   virtual int cacheSize() const { return 0; }
+  /// Whether addDirectional honours w.forcesWanted = false from its cache and w.xi, w.Vj, w.h,
+  /// w.dY, w.dF alone (without Y, F, K or t).
+  virtual bool directionalFromCache() const { return false; }
 };
 
 /// Receives element contributions. particles: local ids of the element (i first);
