@@ -13,7 +13,10 @@
 #include <Tpetra_Core.hpp>
 #include <Tpetra_CrsMatrix.hpp>
 #include <cmath>
+#include <functional>
 
+#include "perinox/solver/LinearSolver.hpp"
+#include "perinox/solver/LinearSolverValidation.hpp"
 #include "perinox/solver/MumpsSolver.hpp"
 
 namespace {
@@ -184,4 +187,35 @@ TEST(Mumps, UnknownOrderingIsRefused) {
   auto p = Teuchos::rcp(new Teuchos::ParameterList("MUMPS"));
   p->set("Ordering", "Magic");
   EXPECT_THROW(f.setParameterList(p), std::exception);
+}
+
+// A preset may carry perinox's own keys (the Jacobian, preconditioner matrix and forcing term it
+// is meant for; xml/solvers/scalable.xml does): a host passes it to buildLinearSolverFactory as
+// read, so those keys never reach Stratimikos, which would refuse them as unknown. A misspelt key
+// and a bad value are still refused, each naming itself.
+TEST(LinearSolverFactory, PerinoxKeysOfAPresetAreAcceptedAndTyposRefused) {
+  auto p = Teuchos::rcp(new Teuchos::ParameterList("Linear Solver"));
+  p->set("Jacobian", "Matrix-Free");
+  p->set("Preconditioner Matrix", "None");
+  p->set("Forcing Term", "Eisenstat-Walker");
+  p->set("Linear Solver Type", "Belos");
+  p->set("Preconditioner Type", "None");
+  EXPECT_NO_THROW(perinox::validateLinearSolverList(*p, "the test list"));
+  EXPECT_NO_THROW(perinox::buildLinearSolverFactory(p, 1));
+  EXPECT_NO_THROW(perinox::buildSplitLinearSolver(p, 1));
+  EXPECT_TRUE(p->isParameter("Preconditioner Matrix"));  // the caller's list is left as it was
+  auto refused = [](const std::function<void()>& f, const std::string& part) {
+    try {
+      f();
+      ADD_FAILURE() << "accepted; expected a refusal naming " << part;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+  };
+  auto typo = Teuchos::rcp(new Teuchos::ParameterList(*p));
+  typo->set("Preconditioner Matrx", "None");
+  refused([&] { perinox::buildLinearSolverFactory(typo, 1); }, "Preconditioner Matrx");
+  auto bad = Teuchos::rcp(new Teuchos::ParameterList(*p));
+  bad->set("Forcing Term", "Sometimes");
+  refused([&] { perinox::validateLinearSolverList(*bad, "the test list"); }, "Sometimes");
 }

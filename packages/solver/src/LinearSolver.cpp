@@ -32,6 +32,19 @@ std::invalid_argument invalidParameters(const std::exception& e) {
   return std::invalid_argument("invalid linear solver parameters: " + out);
 }
 
+/// The list without perinox's own top-level keys ("Jacobian", "Preconditioner Matrix", "Forcing
+/// Term": a preset may name what it is meant for; the scene or evaluatorWithSolver reads them),
+/// which Stratimikos would refuse as unknown. params itself when it has none.
+Teuchos::RCP<Teuchos::ParameterList> withoutPerinoxKeys(const Teuchos::RCP<Teuchos::ParameterList>& params) {
+  const char* keys[] = {"Jacobian", "Preconditioner Matrix", "Forcing Term"};
+  bool any = false;
+  for (const char* k : keys) any = any || params->isParameter(k);
+  if (!any) return params;
+  auto copy = Teuchos::rcp(new Teuchos::ParameterList(*params));
+  for (const char* k : keys) copy->remove(k, false);
+  return copy;
+}
+
 /// Makes the Two-Stage factory with the caller's auxiliary source (Stratimikos asks for a fresh
 /// factory object whenever it builds a strategy).
 class TwoStageFactoryMaker final : public Teuchos::AbstractFactory<Thyra::PreconditionerFactoryBase<double>> {
@@ -100,7 +113,7 @@ Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFacto
   Stratimikos::DefaultLinearSolverBuilder builder;
   registerSolvers(builder, auxiliary);
   try {
-    builder.setParameterList(params);
+    builder.setParameterList(withoutPerinoxKeys(params));
   } catch (const std::exception& e) {
     throw invalidParameters(e);
   }
@@ -114,14 +127,14 @@ SplitLinearSolver buildSplitLinearSolver(const Teuchos::RCP<Teuchos::ParameterLi
         "a matrix-free or Jacobian-free Newton solve needs a Krylov solver: 'Linear Solver Type' must "
         "be Belos (a direct solver needs the assembled matrix)");
   SplitLinearSolver s;
-  auto krylov = Teuchos::rcp(new Teuchos::ParameterList(*params));
+  auto krylov = Teuchos::rcp(new Teuchos::ParameterList(*withoutPerinoxKeys(params)));
   krylov->set("Preconditioner Type", "None");
   s.krylov = buildLinearSolverFactory(krylov, nranks);
   if (params->get<std::string>("Preconditioner Type", "None") != "None") {
     Stratimikos::DefaultLinearSolverBuilder builder;
     registerSolvers(builder, auxiliary);
     try {
-      builder.setParameterList(Teuchos::rcp(new Teuchos::ParameterList(*params)));
+      builder.setParameterList(Teuchos::rcp(new Teuchos::ParameterList(*withoutPerinoxKeys(params))));
     } catch (const std::exception& e) {
       throw invalidParameters(e);
     }

@@ -220,15 +220,17 @@ class Checker {
     std::vector<std::string> topNames = namesOf(valid);
     topNames.push_back("Jacobian");
     topNames.push_back("Preconditioner Matrix");
+    topNames.push_back("Forcing Term");
     for (auto it = user.begin(); it != user.end(); ++it) {
       const std::string& name = user.name(it);
       const ParameterEntry& e = user.entry(it);
       const std::string key = path + "/" + name;
-      if (name == "Jacobian" || name == "Preconditioner Matrix") {  // perinox's own keys (Scene.cpp)
+      if (name == "Jacobian" || name == "Preconditioner Matrix" || name == "Forcing Term") {  // perinox's own keys (Scene.cpp)
         if (!e.isType<std::string>()) fail("'" + key + "' must be of type string, not " + typeName(e));
         const std::vector<std::string> allowed =
-            name == "Jacobian" ? std::vector<std::string>{"Assembled", "Matrix-Free", "Jacobian-Free"}
-                               : std::vector<std::string>{"Assembled", "Neighbours", "None"};
+            name == "Jacobian"         ? std::vector<std::string>{"Assembled", "Matrix-Free", "Jacobian-Free"}
+            : name == "Forcing Term" ? std::vector<std::string>{"Constant", "Eisenstat-Walker"}
+                                     : std::vector<std::string>{"Assembled", "Neighbours", "None"};
         const std::string& value = Teuchos::getValue<std::string>(e);
         if (std::find(allowed.begin(), allowed.end(), value) == allowed.end())
           failWithHint("'" + key + "' = '" + value + "' is not one of " + joined(allowed), value, allowed, "allowed");

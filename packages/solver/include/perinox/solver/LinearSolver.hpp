@@ -23,6 +23,8 @@ Teuchos::RCP<Teuchos::ParameterList> defaultLinearSolverParameters();
 /// in parallel). auxiliary
 /// feeds "Preconditioner Type" = "Two-Stage" (the `scalable` preset; makeAuxiliarySource in
 /// AuxiliaryOperators.hpp makes perinox's); without it that preconditioner refuses to set up.
+/// perinox's own keys a preset may carry ("Jacobian", "Preconditioner Matrix", "Forcing Term")
+/// are left out of what Stratimikos sees, so a preset file can be passed as read.
 Teuchos::RCP<Thyra::LinearOpWithSolveFactoryBase<double>> buildLinearSolverFactory(
     const Teuchos::RCP<Teuchos::ParameterList>& params, int nranks,
     const std::shared_ptr<AuxiliarySource>& auxiliary = nullptr);
