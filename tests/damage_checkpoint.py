@@ -4,7 +4,11 @@
     damage_checkpoint.py SOURCE_DIR DEST_DIR KEY      remove KEY from state.json
     damage_checkpoint.py SOURCE_DIR DEST_DIR :value   replace the first displacement in rank_0.txt by a non-number
     damage_checkpoint.py SOURCE_DIR DEST_DIR KEY=JSON set KEY of state.json to a value no run writes
+    damage_checkpoint.py SOURCE_DIR DEST_DIR scene-:Sublist/Key
+                                                      remove the parameter Sublist/Key from the scene kept
+                                                      in state.json (as a perinox older than the key wrote it)
 """
+import re
 import json
 import shutil
 import sys
@@ -27,6 +31,25 @@ if what == ":value":
 path = dst + "/state.json"
 with open(path) as f:
     state = json.load(f)
+if what.startswith("scene-:"):
+    *subs, name = what[len("scene-:"):].split("/")
+    xml = state["scene"]
+    attrs = r'(?:[^>"]|"[^"]*")*'  # a tag's attributes, each quoted value taken whole
+    # Find the sublists in turn, then the parameter inside the last one.
+    at = 0
+    for sub in subs:
+        m = re.compile(r'<ParameterList\b' + attrs + r'\bname="' + re.escape(sub) + r'"' + attrs + r'>').search(xml, at)
+        if not m:
+            sys.exit(f"FAILED: no sublist {sub!r} in the scene of {path}")
+        at = m.end()
+    m = re.compile(r'\s*<Parameter\b' + attrs + r'\bname="' + re.escape(name) + r'"' + attrs + r'/>').search(xml, at)
+    if not m:
+        sys.exit(f"FAILED: no parameter {name!r} in the scene of {path}")
+    state["scene"] = xml[:m.start()] + xml[m.end():]
+    with open(path, "w") as f:
+        json.dump(state, f)
+    print(f"removed {what[len('scene-:'):]!r} from the scene in {path}")
+    sys.exit(0)
 if "=" in what:
     key, value = what.split("=", 1)
     if key not in state:
