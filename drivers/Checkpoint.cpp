@@ -124,18 +124,10 @@ std::map<std::string, std::pair<std::string, std::string>> physicsValues(const s
 
 /// Whether "Sublist/Key" holds the scene schema's default (exactly, as physicsValues prints it).
 bool atSchemaDefault(const std::string& key, const std::string& exact) {
-  const Teuchos::ParameterList* l = sceneSchema().get();
-  std::size_t from = 0;
-  for (auto slash = key.find('/'); slash != std::string::npos; slash = key.find('/', from)) {
-    const std::string sub = key.substr(from, slash - from);
-    if (!l->isSublist(sub)) return false;
-    l = &l->sublist(sub);
-    from = slash + 1;
-  }
-  const std::string name = key.substr(from);
-  if (!l->isParameter(name) || l->isSublist(name)) return false;
+  const Teuchos::ParameterEntry* e = sceneSchemaEntry(key);
+  if (e == nullptr || e->isList()) return false;
   std::ostringstream d;
-  d << std::setprecision(17) << l->getEntry(name).getAny(false);
+  d << std::setprecision(17) << e->getAny(false);
   return d.str() == exact;
 }
 

@@ -665,14 +665,15 @@ void forEachParameter(const ParameterList& l, const std::string& key, const std:
   }
 }
 
-/// The schema's entry for a key pattern ("Regions/*/Side"), or null.
+/// The schema's entry for a key pattern ("Regions/*/Side") or key ("Regions/left/Side": an entry
+/// of a named sublist is its template's), or null.
 const Teuchos::ParameterEntry* patternEntry(const std::string& pattern) {
   std::vector<std::string> parts;
   std::stringstream ss(pattern);
   for (std::string part; std::getline(ss, part, '/');) parts.push_back(part);
   const ParameterList* l = sceneSchema().get();
   for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
-    if (namedSublists().count(parts[i]) && i + 2 < parts.size() && parts[i + 1] == "*") {
+    if (namedSublists().count(parts[i]) && i + 2 < parts.size()) {
       l = &templateFor(parts[i]);
       ++i;
     } else if (l->isSublist(parts[i])) {
@@ -1966,5 +1967,7 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
     fail(path, teuchosReason(e.what()));
   }
 }
+
+const Teuchos::ParameterEntry* sceneSchemaEntry(const std::string& key) { return patternEntry(key); }
 
 }  // namespace perinox

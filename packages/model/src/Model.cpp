@@ -334,8 +334,7 @@ struct ImplD final : Model::Impl {
     const LocalParticles& p = model.particles();
     BondWork<D> w;
     w.diagonalOnly = true;
-    for (int ii = 0; ii < p.numOwned; ++ii) {
-      const int i = order_.size() == static_cast<std::size_t>(p.numOwned) ? order_[ii] : ii;
+    for (int i = 0; i < p.numOwned; ++i) {  // into a vector: no tile order needed
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
       w.tan.assign(static_cast<std::size_t>(2 * w.m), Mat::Zero());

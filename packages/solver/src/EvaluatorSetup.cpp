@@ -2,6 +2,7 @@
 #include "perinox/solver/EvaluatorSetup.hpp"
 
 #include <Teuchos_XMLParameterListHelpers.hpp>
+#include <algorithm>
 #include <stdexcept>
 
 #include "perinox/solver/AuxiliaryOperators.hpp"
@@ -45,19 +46,19 @@ Teuchos::RCP<PeridynamicEvaluator> evaluatorWithSolver(const Teuchos::RCP<const 
   }
   // A preset may name the Jacobian it is meant for (as a scene's 'Solver/Jacobian = Preset' reads it).
   JacobianChoice choice;
-  auto take = [&](const char* key, std::initializer_list<const char*> allowed) -> int {
+  // The value's place among presetOwnKeys()'s choices for key (their order is the enum's).
+  auto take = [&](const std::string& key) -> int {
     if (!linear->isParameter(key)) return -1;
     const std::string v = linear->isType<std::string>(key) ? linear->get<std::string>(key) : std::string();
     linear->remove(key);
-    int i = 0;
-    for (const char* a : allowed) {
-      if (v == a) return i;
-      ++i;
-    }
-    throw std::invalid_argument("'" + solverFile + "': '" + key + "' = '" + v + "' is not one of the evaluator's choices");
+    const auto& own = *std::find_if(presetOwnKeys().begin(), presetOwnKeys().end(), [&](const auto& k) { return k.first == key; });
+    const auto at = std::find(own.second.begin(), own.second.end(), v);
+    if (at == own.second.end())
+      throw std::invalid_argument("'" + solverFile + "': '" + key + "' = '" + v + "' is not one of the evaluator's choices");
+    return static_cast<int>(at - own.second.begin());
   };
-  const int mode = take("Jacobian", {"Assembled", "Matrix-Free", "Jacobian-Free"});
-  const int matrix = take("Preconditioner Matrix", {"Assembled", "Neighbours", "None"});
+  const int mode = take("Jacobian");
+  const int matrix = take("Preconditioner Matrix");
   if (mode >= 0) choice.mode = static_cast<JacobianMode>(mode);
   if (matrix >= 0) choice.matrix = static_cast<PreconditionerMatrix>(matrix);
   return evaluatorWithSolver(comm, std::move(problem), *linear, "'" + solverFile + "'", choice);

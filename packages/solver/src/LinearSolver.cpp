@@ -1,6 +1,8 @@
 // Stratimikos set-up: kept in its own translation unit (Ifpack2 and MueLu headers are heavy).
 #include "perinox/solver/LinearSolver.hpp"
 
+#include "perinox/solver/LinearSolverValidation.hpp"
+
 #include "perinox/solver/MumpsSolver.hpp"
 #include "perinox/solver/TwoStagePreconditioner.hpp"
 
@@ -9,6 +11,7 @@
 #include <Teuchos_AbstractFactoryStd.hpp>
 #include <Thyra_Ifpack2PreconditionerFactory.hpp>
 #include <Tpetra_CrsMatrix.hpp>
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -32,16 +35,14 @@ std::invalid_argument invalidParameters(const std::exception& e) {
   return std::invalid_argument("invalid linear solver parameters: " + out);
 }
 
-/// The list without perinox's own top-level keys ("Jacobian", "Preconditioner Matrix", "Forcing
-/// Term": a preset may name what it is meant for; the scene or evaluatorWithSolver reads them),
-/// which Stratimikos would refuse as unknown. params itself when it has none.
+/// The list without perinox's own top-level keys (presetOwnKeys: a preset may name what it is
+/// meant for; the scene or evaluatorWithSolver reads them), which Stratimikos would refuse as
+/// unknown. params itself when it has none.
 Teuchos::RCP<Teuchos::ParameterList> withoutPerinoxKeys(const Teuchos::RCP<Teuchos::ParameterList>& params) {
-  const char* keys[] = {"Jacobian", "Preconditioner Matrix", "Forcing Term"};
-  bool any = false;
-  for (const char* k : keys) any = any || params->isParameter(k);
-  if (!any) return params;
+  const auto& keys = presetOwnKeys();
+  if (std::none_of(keys.begin(), keys.end(), [&](const auto& k) { return params->isParameter(k.first); })) return params;
   auto copy = Teuchos::rcp(new Teuchos::ParameterList(*params));
-  for (const char* k : keys) copy->remove(k, false);
+  for (const auto& k : keys) copy->remove(k.first, false);
   return copy;
 }
 

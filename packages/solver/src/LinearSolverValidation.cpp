@@ -218,19 +218,16 @@ class Checker {
   void top(const ParameterList& user, const ParameterList& valid) const {
     const std::string path = kRoot;
     std::vector<std::string> topNames = namesOf(valid);
-    topNames.push_back("Jacobian");
-    topNames.push_back("Preconditioner Matrix");
-    topNames.push_back("Forcing Term");
+    for (const auto& own : presetOwnKeys()) topNames.push_back(own.first);
     for (auto it = user.begin(); it != user.end(); ++it) {
       const std::string& name = user.name(it);
       const ParameterEntry& e = user.entry(it);
       const std::string key = path + "/" + name;
-      if (name == "Jacobian" || name == "Preconditioner Matrix" || name == "Forcing Term") {  // perinox's own keys (Scene.cpp)
+      const auto own = std::find_if(presetOwnKeys().begin(), presetOwnKeys().end(),
+                                    [&](const auto& k) { return k.first == name; });
+      if (own != presetOwnKeys().end()) {  // perinox's own keys (Scene.cpp)
         if (!e.isType<std::string>()) fail("'" + key + "' must be of type string, not " + typeName(e));
-        const std::vector<std::string> allowed =
-            name == "Jacobian"         ? std::vector<std::string>{"Assembled", "Matrix-Free", "Jacobian-Free"}
-            : name == "Forcing Term" ? std::vector<std::string>{"Constant", "Eisenstat-Walker"}
-                                     : std::vector<std::string>{"Assembled", "Neighbours", "None"};
+        const std::vector<std::string>& allowed = own->second;
         const std::string& value = Teuchos::getValue<std::string>(e);
         if (std::find(allowed.begin(), allowed.end(), value) == allowed.end())
           failWithHint("'" + key + "' = '" + value + "' is not one of " + joined(allowed), value, allowed, "allowed");
@@ -490,6 +487,14 @@ void validateLinearSolverList(const Teuchos::ParameterList& stratimikos, const s
   // afresh (about a millisecond) so that no Trilinos object outlives the caller's MPI session.
   const Teuchos::RCP<const Teuchos::ParameterList> valid = validLinearSolverParameters();
   Checker(where).top(stratimikos, *valid);
+}
+
+const std::vector<std::pair<std::string, std::vector<std::string>>>& presetOwnKeys() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> keys = {
+      {"Jacobian", {"Assembled", "Matrix-Free", "Jacobian-Free"}},
+      {"Preconditioner Matrix", {"Assembled", "Neighbours", "None"}},
+      {"Forcing Term", {"Constant", "Eisenstat-Walker"}}};
+  return keys;
 }
 
 }  // namespace perinox

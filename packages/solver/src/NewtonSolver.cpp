@@ -196,7 +196,7 @@ Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& optio
     newton.set("Forcing Term Method", "Type 2");
     // At most 1e-4: looser solves (NOX's 0.9) cost the strongly nonlinear cantilever 40 % more
     // Newton iterations and changed its adaptive load path; 1e-4 keeps both and still saves
-    // about 60 % of the Krylov iterations (docs/performance.md, "Forcing term").
+    // about 60 % of the Krylov iterations (docs/performance.md, "The cost of a Newton iteration").
     newton.set("Forcing Term Initial Tolerance", std::max(1e-4, options.linearTolerance));
     newton.set("Forcing Term Minimum Tolerance", options.linearTolerance);
     newton.set("Forcing Term Maximum Tolerance", std::max(1e-4, options.linearTolerance));

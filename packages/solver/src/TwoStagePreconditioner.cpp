@@ -100,8 +100,8 @@ class TwoStageOperator final : public OP {
 
 /// Chebyshev smoothing of J y = r with diagonal scaling D, from y = 0, over the interval
 /// [lambda_max / ratio, lambda_max] of D^-1 J: `degree` polynomial steps, degree - 1 products
-/// with J. J is any operator (the matrix-free Jacobian); D comes from elsewhere (the auxiliary
-/// matrix's diagonal), lambda_max from powerIteration.
+/// with J. J is any operator (the matrix-free Jacobian); D^-1 and lambda_max are given
+/// (operatorSmoother: J's own diagonal or the auxiliary matrix's, and powerIteration).
 class OperatorChebyshev final : public OP {
  public:
   OperatorChebyshev(RCP<const OP> J, RCP<const MV> inverseDiagonal, int degree, double lambdaMax, double ratio)
@@ -144,8 +144,8 @@ class OperatorChebyshev final : public OP {
 };
 
 /// The largest eigenvalue of D^-1 J by the power method from x (updated to the last iterate, so
-/// the next set-up starts there), `iterations` products with J; the Rayleigh quotient in the
-/// D-inner product... approximated as Ifpack2 does, (x, D^-1 J x) / (x, x).
+/// the next set-up starts there), `iterations` products with J; the estimate is Ifpack2's,
+/// (x, D^-1 J x) / (x, x) with x of unit length.
 double powerIteration(const OP& J, const MV& dinv, MV& x, int iterations) {
   MV y(x.getMap(), 1);
   double lambda = 0.0;
@@ -191,7 +191,7 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
   void initializePrec(const RCP<const Thyra::LinearOpSourceBase<double>>& src, Thyra::PreconditionerBase<double>* prec,
                       const Thyra::ESupportSolveUse) const override {
     // J: the assembled Jacobian (Ifpack2 smoother on it), or the matrix-free Jacobian operator
-    // (perinox's Chebyshev on it, scaled by the auxiliary matrix's diagonal).
+    // (perinox's Chebyshev on it: operatorSmoother).
     auto Jop = tpetraOf(src->getOp());
     if (Jop.is_null())
       throw std::invalid_argument(
@@ -312,33 +312,32 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
           "at least 1, 'chebyshev: ratio eigenvalue' above 1, 'chebyshev: boost factor' at least 1, 'Warm Eigenvalue "
           "Iterations' at least 0");
     const RCP<const TMap> rows = J->getRangeMap();
+    RCP<MV> diagonal;  // a new diagonal on J's rows, inverted below
     if (auto* own = dynamic_cast<const OperatorDiagonal*>(J.get())) {
       // The operator's own diagonal (the matrix-free Jacobian's), at every set-up: it follows
       // the state as an assembled matrix's would.
-      auto d = rcp(new MV(rows, 1));
-      own->getDiagonal(*d);
-      auto dd = d->getDataNonConst(0);
-      for (std::size_t k = 0; k < dd.size(); ++k) dd[k] = dd[k] > 0 && std::isfinite(dd[k]) ? 1.0 / dd[k] : 0.0;
-      dinv_ = d;
+      diagonal = rcp(new MV(rows, 1));
+      own->getDiagonal(*diagonal);
       ++stats_.operatorDiagonals;
     } else if (dinv_.is_null() || !dinv_->getMap()->isSameAs(*rows)) {
-      Tpetra::Vector<double, LO, GO, Node> diag(aux.matrix->getRowMap());
-      aux.matrix->getLocalDiagCopy(diag);
-      auto dd = diag.getData();
-      auto inv = rcp(new MV(rows, 1));
-      auto id = inv->getDataNonConst(0);
-      for (std::size_t k = 0; k < aux.freeToAll.size(); ++k) {
-        const double d = dd[aux.freeToAll[k]];
-        id[k] = d > 0 && std::isfinite(d) ? 1.0 / d : 0.0;
-      }
-      dinv_ = inv;
+      Tpetra::Vector<double, LO, GO, Node> all(aux.matrix->getRowMap());
+      aux.matrix->getLocalDiagCopy(all);
+      auto ad = all.getData();
+      diagonal = rcp(new MV(rows, 1));
+      auto dd = diagonal->getDataNonConst(0);
+      for (std::size_t k = 0; k < aux.freeToAll.size(); ++k) dd[k] = ad[aux.freeToAll[k]];
+    }
+    if (!diagonal.is_null()) {
+      auto dd = diagonal->getDataNonConst(0);
+      for (decltype(dd.size()) k = 0; k < dd.size(); ++k) dd[k] = dd[k] > 0 && std::isfinite(dd[k]) ? 1.0 / dd[k] : 0.0;
+      dinv_ = diagonal;
     }
     int iterations = warm;
     if (eigenvector_.is_null() || !eigenvector_->getMap()->isSameAs(*rows)) {
       // A start with components in every mode, the same on any partition: a hash of the global row.
       eigenvector_ = rcp(new MV(rows, 1));
       auto e = eigenvector_->getDataNonConst(0);
-      for (std::size_t k = 0; k < e.size(); ++k) {
+      for (decltype(e.size()) k = 0; k < e.size(); ++k) {
         unsigned long long h = static_cast<unsigned long long>(rows->getGlobalElement(static_cast<LO>(k))) + 0x9e3779b97f4a7c15ULL;
         h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ULL;
         h = (h ^ (h >> 27)) * 0x94d049bb133111ebULL;

@@ -124,5 +124,8 @@ Scene buildScene(Teuchos::ParameterList pl, const std::string& file, const std::
 
 /// The schema with defaults and documentation, for --help and docs.
 Teuchos::RCP<const Teuchos::ParameterList> sceneSchema();
+/// The schema's entry (default and documentation) for a resolved scene's key "Sublist/Key"
+/// ("Regions/left/Side": a named sublist's entries are its template's), or null if it has none.
+const Teuchos::ParameterEntry* sceneSchemaEntry(const std::string& key);
 
 }  // namespace perinox

@@ -4,6 +4,8 @@
 // with one sentence instead of being ignored or failing at the first load step. The Trilinos
 // headers stay in LinearSolverValidation.cpp.
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace Teuchos {
 class ParameterList;
@@ -14,7 +16,7 @@ namespace perinox {
 /// Throws std::invalid_argument with one sentence "<where>: ..." naming the key by its scene path
 /// ('Solver/Linear Solver/...') when the list has
 ///  - a key that does not exist at a level with a known parameter list: Stratimikos' top level (plus
-///    perinox's own 'Jacobian' and 'Preconditioner Matrix'), 'Linear Solver Types/<name>' (Belos,
+///    perinox's own keys, presetOwnKeys()), 'Linear Solver Types/<name>' (Belos,
 ///    Amesos2, MUMPS, ...), Belos' 'Solver Types/<solver>' sublists (each against that Belos solver's
 ///    own valid parameters), 'Preconditioner Types/Ifpack2' and its 'Ifpack2 Settings' (for the
 ///    RELAXATION family also against the chosen preconditioner's own list), MueLu's simple
@@ -32,5 +34,11 @@ namespace perinox {
 /// values such as 'multigrid algorithm' (MueLu checks those when it builds its hierarchy).
 /// 'where' (the scene file, or "preset 'gmres-ilu'") starts the sentence; empty: no prefix.
 void validateLinearSolverList(const Teuchos::ParameterList& stratimikos, const std::string& where);
+
+/// perinox's own top-level keys a preset may carry besides Stratimikos' (what it is meant for),
+/// each with its allowed values in the order of the evaluator's enums (JacobianMode,
+/// PreconditionerMatrix): "Jacobian", "Preconditioner Matrix", "Forcing Term". The validation
+/// checks them, buildLinearSolverFactory leaves them out, evaluatorWithSolver(file) reads them.
+const std::vector<std::pair<std::string, std::vector<std::string>>>& presetOwnKeys();
 
 }  // namespace perinox
