@@ -63,11 +63,6 @@ MatD<D> contract(const TangentD<D>& A, const MatD<D>& dF) {
 
 template <int D>
 void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
-  if (!w.forcesWanted) {  // a repeated product: dt only, from the kept A(F)
-    const MatD<D> dP = contract<D>(Eigen::Map<const TangentD<D>>(w.cache + D * D), w.dF);
-    for (int l = 0; l < w.m; ++l) w.dt[l].noalias() += dP * w.h[l];
-    return;
-  }
   MatD<D> P;
   TangentD<D> A;
   if (w.cache && !w.cacheFresh) {  // the state of the previous product: P(F) and A(F) kept
@@ -94,9 +89,33 @@ void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
   const StabilizationSpec& st = spec(w.i);
   const double c = st.G * st.C * w.Vi / w0;
   for (int j = 0; j < w.m; ++j) {
-    if (w.forcesWanted) w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
+    w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
     w.dt[j].noalias() += c * (w.dY[j] - w.dF * w.xi[j]);
   }
+}
+
+// dt_l = dP K^-1 xi_l with dP = A(F) : dF, A(F) kept in the cache.
+template <int D>
+void CorrespondenceEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
+  a.A.noalias() += contract<D>(Eigen::Map<const TangentD<D>>(w.cache + D * D), w.dF) * w.Kinv;
+}
+
+// dt_l = c (dY_l - dF xi_l), c = G C V_i / sum V_j.
+template <int D>
+void StabilizationEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
+  const StabilizationSpec& st = spec(w.i);
+  const double c = st.G * st.C * w.Vi / w.Vsum;
+  a.A.noalias() -= c * w.dF;
+  a.c += c;
+}
+
+// Springs: dt_l = C dY_l; average displacement state: dt_l = C sum_j V_j dY_j.
+template <int D>
+void ControlEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
+  if (spec_.kind == ControlSpec::Kind::Springs)
+    a.c += spec_.C;
+  else
+    a.k.noalias() += spec_.C * w.VdYsum;
 }
 
 template <int D>
@@ -104,18 +123,18 @@ void ControlEffect<D>::addDirectional(BondWork<D>& w) const {
   using Vec = typename BondWork<D>::Vec;
   if (spec_.kind == ControlSpec::Kind::Springs) {
     for (int j = 0; j < w.m; ++j) {
-      if (w.forcesWanted) w.t[j].noalias() += spec_.C * (w.Y[j] - w.xi[j]);
+      w.t[j].noalias() += spec_.C * (w.Y[j] - w.xi[j]);
       w.dt[j].noalias() += spec_.C * w.dY[j];
     }
     return;
   }
   Vec avg = Vec::Zero(), davg = Vec::Zero();
   for (int l = 0; l < w.m; ++l) {
-    if (w.forcesWanted) avg += w.Vj[l] * (w.Y[l] - w.xi[l]);
+    avg += w.Vj[l] * (w.Y[l] - w.xi[l]);
     davg += w.Vj[l] * w.dY[l];
   }
   for (int j = 0; j < w.m; ++j) {
-    if (w.forcesWanted) w.t[j].noalias() += spec_.C * avg;
+    w.t[j].noalias() += spec_.C * avg;
     w.dt[j].noalias() += spec_.C * davg;
   }
 }

@@ -20,7 +20,8 @@ class CorrespondenceEffect final : public ForceEffect<D> {
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
   int cacheSize() const override { return D * D + D * D * D * D; }  // P and A = dP/dF
-  bool directionalFromCache() const override { return true; }
+  bool affineDirectional() const override { return true; }
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
 
  private:
   const Material& material(int i) const { return index_.empty() ? materials_.front() : materials_[index_[i]]; }
@@ -39,7 +40,8 @@ class ControlEffect final : public ForceEffect<D> {
   }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
-  bool directionalFromCache() const override { return true; }
+  bool affineDirectional() const override { return true; }
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
 
  private:
   ControlSpec spec_;
@@ -87,7 +89,8 @@ class StabilizationEffect final : public ForceEffect<D> {
   const char* name() const override { return "stabilization"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
-  bool directionalFromCache() const override { return true; }
+  bool affineDirectional() const override { return true; }
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
 
  private:
   const StabilizationSpec& spec(int i) const { return index_.empty() ? specs_.front() : specs_[index_[i]]; }

@@ -125,21 +125,20 @@ struct ImplD final : Model::Impl {
         linCache_[e].resize(static_cast<std::size_t>(p.numOwned) * effects[e]->cacheSize());
     }
     if (fresh) linKinv_.assign(p.numOwned, Mat::Zero());
-    // A repeated product without damage needs no force states: the effects that can then work
-    // from their cache get only xi, V_j, h (from the kept K^-1) and dY (about half the work).
-    const bool lite = !fresh && !damage &&
-                      std::all_of(effects.begin(), effects.end(), [](const auto& e) { return e->directionalFromCache(); });
+    // A repeated product without damage, when every effect's dt is affine in the bond
+    // (dt_l = A xi_l + c dY_l + k), needs per bond only xi, dY and two short passes.
+    if (!fresh && !damage &&
+        std::all_of(effects.begin(), effects.end(), [](const auto& e) { return e->affineDirectional(); })) {
+      applyAffine(model, v, jv);
+      linValid_ = true;
+      return;
+    }
     BondWork<D> w;
     w.cacheFresh = fresh;
-    w.forcesWanted = !lite;
     for (int i = 0; i < p.numOwned; ++i) {
       if (model.detached(i)) continue;
-      if (lite) {
-        bondsOnly(p, i, linKinv_[i], w);
-      } else {
-        kinematics(p, u, i, w);
-        if (fresh) linKinv_[i] = w.Kinv;
-      }
+      kinematics(p, u, i, w);
+      if (fresh) linKinv_[i] = w.Kinv;
       w.dY.resize(w.m);
       w.dt.assign(w.m, Vec::Zero());
       w.dF.setZero();
@@ -170,6 +169,78 @@ struct ImplD final : Model::Impl {
       }
     }
     linValid_ = true;  // (an evaluation error above leaves it invalid)
+  }
+
+  /// A repeated product at the kept state whose effects are all affine in the bond: per
+  /// particle, one pass for dF = (sum_l V_l dY_l (x) xi_l) K^-1 (K is symmetric) and the family's
+  /// sums, the effects' A, c and k, and one pass for dt_l = A xi_l + c dY_l + k into jv.
+  void applyAffine(const Model& model, const std::vector<double>& v, double* jv) const {
+    const LocalParticles& p = model.particles();
+    BondWork<D> w;
+    for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) continue;
+      family(p, i, w);
+      w.dY.resize(w.m);
+      const Eigen::Vector3d& Xi = p.X[i];
+      Vec vi;
+      for (int a = 0; a < D; ++a) vi[a] = v[i * D + a];
+      // The sums live in locals (registers), the inner loops unrolled: this is the hot loop of
+      // a matrix-free Krylov iteration.
+      Mat S = Mat::Zero();
+      Vec VdY = Vec::Zero();
+      double Vsum = 0;
+      for (int l = 0; l < w.m; ++l) {
+        const int j = w.nbr[l];
+        const double Vj = p.volume[j];
+        const double* Xj = p.X[j].data();
+        const double* vj = v.data() + static_cast<std::size_t>(j) * D;
+        Vec xi, dY;
+#pragma GCC unroll 3
+        for (int a = 0; a < D; ++a) {
+          xi[a] = Xj[a] - Xi[a];
+          dY[a] = vj[a] - vi[a];
+        }
+        w.xi[l] = xi;
+        w.dY[l] = dY;
+        w.Vj[l] = Vj;
+        Vsum += Vj;
+#pragma GCC unroll 3
+        for (int a = 0; a < D; ++a) {
+          const double wa = Vj * dY[a];
+          VdY[a] += wa;
+#pragma GCC unroll 3
+          for (int b = 0; b < D; ++b) S(a, b) += wa * xi[b];
+        }
+      }
+      w.Vsum = Vsum;
+      w.VdYsum = VdY;
+      w.Kinv = linKinv_[i];
+      w.dF.noalias() = S * w.Kinv;
+      AffineDirectional<D> f;
+      for (std::size_t e = 0; e < effects.size(); ++e) {
+        const int cs = effects[e]->cacheSize();
+        w.cache = cs > 0 ? linCache_[e].data() + static_cast<std::size_t>(i) * cs : nullptr;
+        effects[e]->addAffineDirectional(w, f);
+      }
+      const Mat A = f.A;
+      const double c = f.c;
+      const Vec k = f.k;
+      Vec ji = Vec::Zero();
+      for (int l = 0; l < w.m; ++l) {
+        const Vec xi = w.xi[l], dY = w.dY[l];
+        const double s = w.Vi * w.Vj[l];
+        double* jj = jv + static_cast<std::size_t>(w.nbr[l]) * D;
+#pragma GCC unroll 3
+        for (int a = 0; a < D; ++a) {
+          double dt = c * dY[a] + k[a];
+#pragma GCC unroll 3
+          for (int b = 0; b < D; ++b) dt += A(a, b) * xi[b];
+          ji[a] -= s * dt;
+          jj[a] += s * dt;
+        }
+      }
+      for (int a = 0; a < D; ++a) jv[i * D + a] += ji[a];
+    }
   }
 
   void addCorrespondence(const std::vector<Material>& mats) override {
@@ -225,17 +296,6 @@ struct ImplD final : Model::Impl {
     w.xi.resize(w.m);
     w.h.resize(w.m);
     w.Vj.resize(w.m);
-  }
-
-  /// The reference bonds of particle i with h_j = K^-1 xi_j from a kept K^-1 (no Y, F or t).
-  static void bondsOnly(const LocalParticles& p, int i, const Mat& Kinv, BondWork<D>& w) {
-    family(p, i, w);
-    for (int l = 0; l < w.m; ++l) {
-      const int j = w.nbr[l];
-      for (int a = 0; a < D; ++a) w.xi[l][a] = p.X[j][a] - p.X[i][a];
-      w.h[l] = Kinv * w.xi[l];
-      w.Vj[l] = p.volume[j];
-    }
   }
 
   /// Fills the kinematics of particle i: bonds, K, K^-1, F, h_j.

@@ -476,7 +476,7 @@ TEST(Model, StressPoints2D3D) {
 // equals the assembled element tangents times v, for every effect alone and combined, in 1D,
 // 2D and 3D, with damage on bonds below, inside and beyond the softening band. Both are exact
 // derivatives summed in different orders, so they agree to round-off: 1e-12 relative. A second
-// product at one state without damage takes the lighter path (no force states, the kept K^-1);
+// product at one state without damage takes the affine path (dt_l = A xi_l + c dY_l + k);
 // the Jacobian's diagonal (Model::addJacobianDiagonal) equals the assembled one's too.
 TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
   struct Case {

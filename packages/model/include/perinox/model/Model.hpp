@@ -99,9 +99,18 @@ struct BondWork {
   // it when cacheFresh and reading it otherwise.
   double* cache = nullptr;
   bool cacheFresh = false;
-  // False in a repeated product at a kept state without damage: the effects then add only dt
-  // (the force states t are not asked for), and the model has filled xi, Vj, h and dY only.
-  bool forcesWanted = true;
+  // Sums over the family a repeated product's affine form may use (filled only for it):
+  double Vsum = 0;             // sum_l V_l
+  Vec VdYsum;                  // sum_l V_l dY_l
+};
+
+/// A repeated matrix-free product's bond force states when they are affine in the bond: the
+/// same A, c and k give dt_l = A xi_l + c dY_l + k for every bond l of the particle.
+template <int D>
+struct AffineDirectional {
+  Eigen::Matrix<double, D, D> A = Eigen::Matrix<double, D, D>::Zero();
+  double c = 0;
+  Eigen::Matrix<double, D, 1> k = Eigen::Matrix<double, D, 1>::Zero();
 };
 
 /// One effect: adds its bond force states (and their derivatives) for particle i.
@@ -119,9 +128,14 @@ class ForceEffect {
   virtual void addDirectional(BondWork<D>& w) const = 0;
   /// Doubles per particle this effect keeps between matrix-free products at one state (0: none).
   virtual int cacheSize() const { return 0; }
-  /// Whether addDirectional honours w.forcesWanted = false from its cache and w.xi, w.Vj, w.h,
-  /// w.dY, w.dF alone (without Y, F, K or t).
-  virtual bool directionalFromCache() const { return false; }
+  /// Whether this effect's directional force states at a kept state (a repeated product, no
+  /// damage) are affine in the bond (addAffineDirectional). When every effect of a model says
+  /// so, such a product visits each bond twice with a few flops and nothing else.
+  virtual bool affineDirectional() const { return false; }
+  /// Adds this effect's share of the affine form dt_l = A xi_l + c dY_l + k, from its cache
+  /// (filled by the last addDirectional at this state) and w.i, w.Vi, w.Kinv, w.dF, w.Vsum and
+  /// w.VdYsum alone: nothing per bond is filled.
+  virtual void addAffineDirectional(const BondWork<D>& /*w*/, AffineDirectional<D>& /*a*/) const {}
 };
 
 /// Receives element contributions. particles: local ids of the element (i first);
