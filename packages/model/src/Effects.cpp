@@ -94,28 +94,43 @@ void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
   }
 }
 
-// dt_l = dP K^-1 xi_l with dP = A(F) : dF, A(F) kept in the cache.
+// dt_l = dP K^-1 xi_l with dP = A(F) : dF; t_l = P K^-1 xi_l; P and A(F) kept in the cache.
 template <int D>
-void CorrespondenceEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
-  a.A.noalias() += contract<D>(Eigen::Map<const TangentD<D>>(w.cache + D * D), w.dF) * w.Kinv;
+void CorrespondenceEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt,
+                                                   AffineDirectional<D>* t) const {
+  dt.A.noalias() += contract<D>(Eigen::Map<const TangentD<D>>(w.cache + D * D), w.dF) * w.Kinv;
+  if (t) t->A.noalias() += Eigen::Map<const MatD<D>>(w.cache) * w.Kinv;
 }
 
-// dt_l = c (dY_l - dF xi_l), c = G C V_i / sum V_j.
+// dt_l = c (dY_l - dF xi_l), t_l = c (Y_l - F xi_l), c = G C V_i / sum V_j.
 template <int D>
-void StabilizationEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
+void StabilizationEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt,
+                                                  AffineDirectional<D>* t) const {
   const StabilizationSpec& st = spec(w.i);
   const double c = st.G * st.C * w.Vi / w.Vsum;
-  a.A.noalias() -= c * w.dF;
-  a.c += c;
+  dt.A.noalias() -= c * w.dF;
+  dt.c += c;
+  if (t) {
+    t->A.noalias() -= c * w.F;
+    t->c += c;
+  }
 }
 
-// Springs: dt_l = C dY_l; average displacement state: dt_l = C sum_j V_j dY_j.
+// Springs: dt_l = C dY_l, t_l = C (Y_l - xi_l); average displacement state: dt_l = C sum_j V_j
+// dY_j, t_l = C sum_j V_j (Y_j - xi_j).
 template <int D>
-void ControlEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const {
-  if (spec_.kind == ControlSpec::Kind::Springs)
-    a.c += spec_.C;
-  else
-    a.k.noalias() += spec_.C * w.VdYsum;
+void ControlEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt,
+                                            AffineDirectional<D>* t) const {
+  if (spec_.kind == ControlSpec::Kind::Springs) {
+    dt.c += spec_.C;
+    if (t) {
+      t->A.diagonal().array() -= spec_.C;
+      t->c += spec_.C;
+    }
+  } else {
+    dt.k.noalias() += spec_.C * w.VdYsum;
+    if (t) t->k.noalias() += spec_.C * w.VUsum;
+  }
 }
 
 template <int D>

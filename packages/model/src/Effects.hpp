@@ -21,7 +21,7 @@ class CorrespondenceEffect final : public ForceEffect<D> {
   void addDirectional(BondWork<D>& w) const override;
   int cacheSize() const override { return D * D + D * D * D * D; }  // P and A = dP/dF
   bool affineDirectional() const override { return true; }
-  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt, AffineDirectional<D>* t) const override;
 
  private:
   const Material& material(int i) const { return index_.empty() ? materials_.front() : materials_[index_[i]]; }
@@ -41,7 +41,7 @@ class ControlEffect final : public ForceEffect<D> {
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
   bool affineDirectional() const override { return true; }
-  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt, AffineDirectional<D>* t) const override;
 
  private:
   ControlSpec spec_;
@@ -90,7 +90,7 @@ class StabilizationEffect final : public ForceEffect<D> {
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
   bool affineDirectional() const override { return true; }
-  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& a) const override;
+  void addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt, AffineDirectional<D>* t) const override;
 
  private:
   const StabilizationSpec& spec(int i) const { return index_.empty() ? specs_.front() : specs_[index_[i]]; }

@@ -94,14 +94,21 @@ struct ImplD final : Model::Impl {
 
   /// The directional form of soften: dt_j <- T_s dt_j + T_s' (Y_j . dY_j / (|Y_j| |xi_j|)) t_j,
   /// then t_j <- T_s t_j.
-  static void softenDirectional(const Model& model, BondWork<D>& w) {
+  /// With soft, each bond's T_s and T_s' / (|Y_j| |xi_j|) (0 outside the band) are kept there
+  /// (two doubles a bond) for the affine products that follow at this state.
+  static void softenDirectional(const Model& model, BondWork<D>& w, double* soft) {
     for (int j = 0; j < w.m; ++j) {
       const double ly = w.Y[j].norm(), lx = w.xi[j].norm();
       double Ts, dTs;
       bondSoftening(model.bondDamage(w.i, w.nbr[j]), (ly - lx) / lx, Ts, dTs);
+      const double gamma = dTs != 0.0 && ly > 0 ? dTs / (ly * lx) : 0.0;
       w.dt[j] *= Ts;
-      if (dTs != 0.0 && ly > 0) w.dt[j] += (dTs * w.Y[j].dot(w.dY[j]) / (ly * lx)) * w.t[j];
+      if (gamma != 0.0) w.dt[j] += (gamma * w.Y[j].dot(w.dY[j])) * w.t[j];
       w.t[j] *= Ts;
+      if (soft) {
+        soft[2 * j] = Ts;
+        soft[2 * j + 1] = gamma;
+      }
     }
   }
 
@@ -110,6 +117,8 @@ struct ImplD final : Model::Impl {
   mutable std::vector<double> linU_;
   mutable std::vector<std::vector<double>> linCache_;
   mutable std::vector<Mat> linKinv_;  // K^-1 per owned particle at that state (shape only: kept while the bonds are)
+  mutable std::vector<Mat> linF_;     // with damage: F per owned particle at that state
+  mutable std::vector<double> linSoft_;  // with damage: T_s and T_s' / (|Y| |xi|) per bond (softenDirectional)
   mutable bool linValid_ = false;
   void invalidate() override { linValid_ = false; }
 
@@ -124,12 +133,17 @@ struct ImplD final : Model::Impl {
       for (std::size_t e = 0; e < effects.size(); ++e)
         linCache_[e].resize(static_cast<std::size_t>(p.numOwned) * effects[e]->cacheSize());
     }
-    if (fresh) linKinv_.assign(p.numOwned, Mat::Zero());
-    // A repeated product without damage, when every effect's dt is affine in the bond
-    // (dt_l = A xi_l + c dY_l + k), needs per bond only xi, dY and two short passes.
-    if (!fresh && !damage &&
-        std::all_of(effects.begin(), effects.end(), [](const auto& e) { return e->affineDirectional(); })) {
-      applyAffine(model, v, jv);
+    const bool affine = std::all_of(effects.begin(), effects.end(), [](const auto& e) { return e->affineDirectional(); });
+    if (fresh) {
+      linKinv_.assign(p.numOwned, Mat::Zero());
+      linF_.assign(damage && affine ? p.numOwned : 0, Mat::Zero());
+      linSoft_.assign(damage && affine ? 2 * static_cast<std::size_t>(p.famOffset[p.numOwned]) : 0, 0.0);
+    }
+    // A repeated product, when every effect's dt is affine in the bond (dt_l = A xi_l + c dY_l
+    // + k), needs per bond only xi, dY and two short passes (and, with damage, the kept
+    // softening of each bond).
+    if (!fresh && affine) {
+      applyAffine(model, u, v, jv);
       linValid_ = true;
       return;
     }
@@ -139,6 +153,7 @@ struct ImplD final : Model::Impl {
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
       if (fresh) linKinv_[i] = w.Kinv;
+      if (fresh && damage && affine) linF_[i] = w.F;
       w.dY.resize(w.m);
       w.dt.assign(w.m, Vec::Zero());
       w.dF.setZero();
@@ -158,7 +173,8 @@ struct ImplD final : Model::Impl {
         msg << e.what() << " at particle " << p.globalId[i] << " (X = " << p.X[i].head(D).transpose() << ")";
         throw EvaluationError(msg.str(), p.globalId[i]);
       }
-      if (damage) softenDirectional(*damage, w);
+      if (damage)
+        softenDirectional(*damage, w, fresh && affine ? linSoft_.data() + 2 * static_cast<std::size_t>(p.famOffset[i]) : nullptr);
       for (int l = 0; l < w.m; ++l) {
         const double s = w.Vi * w.Vj[l];
         const int j = w.nbr[l];
@@ -173,8 +189,11 @@ struct ImplD final : Model::Impl {
 
   /// A repeated product at the kept state whose effects are all affine in the bond: per
   /// particle, one pass for dF = (sum_l V_l dY_l (x) xi_l) K^-1 (K is symmetric) and the family's
-  /// sums, the effects' A, c and k, and one pass for dt_l = A xi_l + c dY_l + k into jv.
-  void applyAffine(const Model& model, const std::vector<double>& v, double* jv) const {
+  /// sums, the effects' A, c and k, and one pass for dt_l = A xi_l + c dY_l + k into jv. With
+  /// damage each bond's dt is softened as softenDirectional does, from the kept T_s and
+  /// gamma = T_s' / (|Y| |xi|): dt_l <- T_s dt_l + gamma (Y_l . dY_l) t_l, with the unsoftened
+  /// t_l = A0 xi_l + c0 Y_l + k0 formed only for the bonds in the softening band (gamma != 0).
+  void applyAffine(const Model& model, const std::vector<double>& u, const std::vector<double>& v, double* jv) const {
     const LocalParticles& p = model.particles();
     BondWork<D> w;
     for (int i = 0; i < p.numOwned; ++i) {
@@ -182,12 +201,15 @@ struct ImplD final : Model::Impl {
       family(p, i, w);
       w.dY.resize(w.m);
       const Eigen::Vector3d& Xi = p.X[i];
-      Vec vi;
-      for (int a = 0; a < D; ++a) vi[a] = v[i * D + a];
+      Vec vi, ui;
+      for (int a = 0; a < D; ++a) {
+        vi[a] = v[i * D + a];
+        ui[a] = u[i * D + a];
+      }
       // The sums live in locals (registers), the inner loops unrolled: this is the hot loop of
       // a matrix-free Krylov iteration.
       Mat S = Mat::Zero();
-      Vec VdY = Vec::Zero();
+      Vec VdY = Vec::Zero(), VU = Vec::Zero();
       double Vsum = 0;
       for (int l = 0; l < w.m; ++l) {
         const int j = w.nbr[l];
@@ -211,32 +233,53 @@ struct ImplD final : Model::Impl {
 #pragma GCC unroll 3
           for (int b = 0; b < D; ++b) S(a, b) += wa * xi[b];
         }
+        if (damage)
+          for (int a = 0; a < D; ++a) VU[a] += Vj * (u[j * D + a] - ui[a]);
       }
       w.Vsum = Vsum;
       w.VdYsum = VdY;
+      w.VUsum = VU;
       w.Kinv = linKinv_[i];
       w.dF.noalias() = S * w.Kinv;
-      AffineDirectional<D> f;
+      if (damage) w.F = linF_[i];
+      AffineDirectional<D> f, f0;
       for (std::size_t e = 0; e < effects.size(); ++e) {
         const int cs = effects[e]->cacheSize();
         w.cache = cs > 0 ? linCache_[e].data() + static_cast<std::size_t>(i) * cs : nullptr;
-        effects[e]->addAffineDirectional(w, f);
+        effects[e]->addAffineDirectional(w, f, damage ? &f0 : nullptr);
       }
       const Mat A = f.A;
       const double c = f.c;
       const Vec k = f.k;
+      const double* soft = damage ? linSoft_.data() + 2 * static_cast<std::size_t>(p.famOffset[i]) : nullptr;
       Vec ji = Vec::Zero();
       for (int l = 0; l < w.m; ++l) {
         const Vec xi = w.xi[l], dY = w.dY[l];
-        const double s = w.Vi * w.Vj[l];
-        double* jj = jv + static_cast<std::size_t>(w.nbr[l]) * D;
+        const int j = w.nbr[l];
+        Vec dt;
 #pragma GCC unroll 3
         for (int a = 0; a < D; ++a) {
-          double dt = c * dY[a] + k[a];
+          double d = c * dY[a] + k[a];
 #pragma GCC unroll 3
-          for (int b = 0; b < D; ++b) dt += A(a, b) * xi[b];
-          ji[a] -= s * dt;
-          jj[a] += s * dt;
+          for (int b = 0; b < D; ++b) d += A(a, b) * xi[b];
+          dt[a] = d;
+        }
+        if (soft) {
+          dt *= soft[2 * l];
+          const double gamma = soft[2 * l + 1];
+          if (gamma != 0.0) {
+            Vec Y;
+            for (int a = 0; a < D; ++a) Y[a] = xi[a] + u[j * D + a] - ui[a];
+            const Vec t = f0.A * xi + f0.c * Y + f0.k;
+            dt += (gamma * Y.dot(dY)) * t;
+          }
+        }
+        const double s = w.Vi * w.Vj[l];
+        double* jj = jv + static_cast<std::size_t>(j) * D;
+#pragma GCC unroll 3
+        for (int a = 0; a < D; ++a) {
+          ji[a] -= s * dt[a];
+          jj[a] += s * dt[a];
         }
       }
       for (int a = 0; a < D; ++a) jv[i * D + a] += ji[a];

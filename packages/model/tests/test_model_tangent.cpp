@@ -493,6 +493,8 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       {"stress points + damage", false, false, false, false, true, true, false},
       {"stabilised + damage", true, true, false, false, false, true, false},
       {"stabilised + continuous damage", true, true, false, false, false, true, false, true},
+      {"springs + damage", true, false, true, false, false, true, false},
+      {"average displacement + damage", true, false, false, true, false, true, false},
   };
   for (int dim : {1, 2, 3}) {
     for (const Case& c : cases) {

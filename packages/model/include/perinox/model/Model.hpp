@@ -102,6 +102,7 @@ struct BondWork {
   // Sums over the family a repeated product's affine form may use (filled only for it):
   double Vsum = 0;             // sum_l V_l
   Vec VdYsum;                  // sum_l V_l dY_l
+  Vec VUsum;                   // sum_l V_l (u_j - u_i) at the kept state (with damage only)
 };
 
 /// A repeated matrix-free product's bond force states when they are affine in the bond: the
@@ -128,14 +129,17 @@ class ForceEffect {
   virtual void addDirectional(BondWork<D>& w) const = 0;
   /// Doubles per particle this effect keeps between matrix-free products at one state (0: none).
   virtual int cacheSize() const { return 0; }
-  /// Whether this effect's directional force states at a kept state (a repeated product, no
-  /// damage) are affine in the bond (addAffineDirectional). When every effect of a model says
-  /// so, such a product visits each bond twice with a few flops and nothing else.
+  /// Whether this effect's force states and their directional derivatives at a kept state (a
+  /// repeated product) are affine in the bond (addAffineDirectional). When every effect of a
+  /// model says so, such a product visits each bond twice with a few flops and nothing else.
   virtual bool affineDirectional() const { return false; }
   /// Adds this effect's share of the affine form dt_l = A xi_l + c dY_l + k, from its cache
   /// (filled by the last addDirectional at this state) and w.i, w.Vi, w.Kinv, w.dF, w.Vsum and
-  /// w.VdYsum alone: nothing per bond is filled.
-  virtual void addAffineDirectional(const BondWork<D>& /*w*/, AffineDirectional<D>& /*a*/) const {}
+  /// w.VdYsum alone: nothing per bond is filled. With damage, t is not null: add also the force
+  /// states' own form at the kept state, t_l = A xi_l + c Y_l + k, from w.F and w.VUsum (the
+  /// model softens bond by bond, which needs the unsoftened t of the bonds in the band).
+  virtual void addAffineDirectional(const BondWork<D>& /*w*/, AffineDirectional<D>& /*dt*/,
+                                    AffineDirectional<D>* /*t*/) const {}
 };
 
 /// Receives element contributions. particles: local ids of the element (i first);
