@@ -382,7 +382,8 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"hierarchies_built", facts.twoStage.hierarchiesBuilt},
                            {"eigenvalue_products", facts.twoStage.eigenvalueProducts},
                            {"operator_diagonals", facts.twoStage.operatorDiagonals},
-                           {"levels", facts.twoStage.levels}};
+                           {"levels", facts.twoStage.levels},
+                           {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
   const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed

@@ -12,6 +12,11 @@ not change (summary.json "preconditioner").
                                                        the first set-up, WARM at each later one
     check_preconditioner.py --own-diagonal RUN_DIR     the matrix-free smoother scaled by the operator's
                                                        own diagonal at every set-up
+    check_preconditioner.py --fine-smoothed all|none RUN_DIR
+                                                       a hierarchy of more than one level was built,
+                                                       and MueLu smooths its finest level in every
+                                                       one (all) or in none (none): "Auxiliary Fine
+                                                       Smoothing" = Auto smooths there only with damage
     check_preconditioner.py --krylov-within F REF_DIR RUN_DIR
                                                        Krylov iterations per linear solve of RUN_DIR at
                                                        most F times REF_DIR's
@@ -29,6 +34,7 @@ ap.add_argument("--damage", action="store_true")
 ap.add_argument("--eigenvalue-products", type=int, nargs=2, metavar=("FIRST", "WARM"))
 ap.add_argument("--krylov-within", type=float)
 ap.add_argument("--own-diagonal", action="store_true")
+ap.add_argument("--fine-smoothed", choices=["all", "none"])
 ap.add_argument("runs", nargs="+")
 a = ap.parse_args()
 if len(a.runs) != (2 if a.krylov_within is not None else 1):
@@ -81,6 +87,16 @@ if a.own_diagonal:
     print(f"set-ups scaled by the operator's own diagonal {got} of {p['setups']}")
     if got != p["setups"]:
         print("FAILED: the smoother fell back to another diagonal")
+        sys.exit(1)
+if a.fine_smoothed is not None:
+    got = p.get("fine_smoothed_hierarchies")
+    want = p["hierarchies_built"] if a.fine_smoothed == "all" else 0
+    print(f"hierarchies with a smoothed finest level {got} of {p['hierarchies_built']}, expected {want}")
+    if p["levels"] < 2:
+        print("FAILED: a one-level hierarchy (the coarse solve alone) cannot show the finest level's smoother")
+        sys.exit(1)
+    if got != want:
+        print("FAILED: the auxiliary hierarchy's finest level is not smoothed as 'Auxiliary Fine Smoothing' = Auto says")
         sys.exit(1)
 if a.krylov_within is not None:
     ref, run = per_solve(a.runs[0]), per_solve(a.run)

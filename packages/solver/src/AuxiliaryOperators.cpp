@@ -47,6 +47,7 @@ AuxiliaryOperator allDofLayout(const PeridynamicEvaluator& ev, RCP<const TMap>& 
   auto nodeMap = rcp(new TMap(inv, nodes.data(), nodes.size(), 0, comm));
   AuxiliaryOperator a;
   a.blockSize = D;
+  a.damage = static_cast<bool>(P.damage);
   auto fm = ev.ownedFreeMap();
   a.freeToAll.assign(fm->getNodeNumElements(), -1);
   const auto& owned = ev.ownedParticles();

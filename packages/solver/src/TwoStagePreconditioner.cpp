@@ -211,6 +211,13 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
     if (hierarchy_.is_null() || version_ != aux.version || auxMatrix_.get() != aux.matrix.get()) {
       Teuchos::ParameterList mp = pl.sublist("MueLu");
       mp.set("number of equations", aux.blockSize);
+      // The finest level is smoothed by the Chebyshev steps on J; the auxiliary matrix's own
+      // sweeps there cost 15-70 % of a solve for no fewer Krylov iterations on undamaged bodies,
+      // but save a third of them on damaged ones (docs/performance.md, session 17). A "level 0"
+      // list of the user's MueLu parameters is left as given.
+      const std::string fine = pl.get<std::string>("Auxiliary Fine Smoothing");
+      if ((fine == "Never" || (fine == "Auto" && !aux.damage)) && !mp.isSublist("level 0"))
+        mp.sublist("level 0").set("smoother: pre or post", "none");
       auto& user = mp.sublist("user data");
       user.set("Nullspace", Teuchos::rcp_const_cast<MV>(aux.nullspace));
       user.set("Coordinates", Teuchos::rcp_const_cast<MV>(aux.coordinates));
@@ -227,7 +234,12 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       }
       RCP<OP> A = Teuchos::rcp_const_cast<TCrsMatrix>(aux.matrix);
       hierarchy_ = MueLu::CreateTpetraPreconditioner<double, LO, GO, Node>(A, mp);
-      stats_.levels = hierarchy_->GetHierarchy()->GetNumLevels();
+      const auto H = hierarchy_->GetHierarchy();
+      stats_.levels = H->GetNumLevels();
+      if (stats_.levels > 1) {  // a one-level hierarchy is its coarse solve
+        const auto L0 = H->GetLevel(0);
+        if (L0->IsAvailable("PreSmoother") || L0->IsAvailable("PostSmoother")) ++stats_.fineSmoothedHierarchies;
+      }
       ++stats_.hierarchiesBuilt;
       version_ = aux.version;
       auxMatrix_ = aux.matrix;
@@ -397,6 +409,10 @@ Teuchos::RCP<const Teuchos::ParameterList> twoStageValidParameters() {
            "peridynamic Jacobian of the same body at a horizon of 'Auxiliary Horizon Factor' spacings, bonds broken "
            "as in the body), or Auto (Lattice FEM on an undamaged lattice, Short Horizon otherwise)",
            rcp(new Teuchos::StringValidator(kinds)));
+    p->set("Auxiliary Fine Smoothing", "Auto",
+           "MueLu's smoother on the auxiliary hierarchy's finest level: Always, Never (the Chebyshev steps on J "
+           "smooth there), or Auto (only when the body has damage); a 'level 0' list in MueLu's parameters wins",
+           rcp(new Teuchos::StringValidator(Teuchos::tuple<std::string>("Auto", "Always", "Never"))));
     p->set("Warm Eigenvalue Iterations", 3,
            "matrix-free Jacobian: power iterations for the Chebyshev smoother's largest eigenvalue at each set-up after "
            "the first, started from the last set-up's vector (the first takes 'chebyshev: eigenvalue max iterations'); "

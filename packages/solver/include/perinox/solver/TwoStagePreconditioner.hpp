@@ -44,6 +44,10 @@ struct AuxiliaryOperator {
   /// J's local row k (an owned free DOF) is the all-DOF map's local row freeToAll[k].
   std::vector<int> freeToAll;
   int blockSize = 1;
+  /// The body can soften and break bonds (damage on): its tangent is then smoothed less well by
+  /// the Chebyshev steps on J alone, and "Auxiliary Fine Smoothing" = Auto keeps the auxiliary
+  /// hierarchy's own finest-level smoother.
+  bool damage = false;
   /// Changes whenever the matrix does: the multigrid hierarchy is rebuilt only then.
   long long version = 0;
 };
@@ -69,6 +73,8 @@ inline const char* twoStageName() { return "Two-Stage"; }
 ///   "MueLu" (MueLu's list for the hierarchy of A);
 ///   "Warm Eigenvalue Iterations" (operator J: power
 ///   iterations at each set-up after the first, default 3);
+///   "Auxiliary Fine Smoothing" (Auto | Always | Never: MueLu's smoother on the auxiliary matrix's
+///   finest level; Auto: only with damage, since the Chebyshev steps on J smooth that level);
 ///   "Auxiliary Operator" (Auto | Lattice FEM | Short Horizon) and "Auxiliary Horizon Factor"
 ///   (for Short Horizon), read by whoever builds the source (makeAuxiliarySource).
 /// Without a source (e.g. for validation), set-up throws a sentence saying what is missing.
@@ -98,6 +104,9 @@ struct TwoStageStatistics {
   /// Set-ups that scaled it by the operator's own diagonal (OperatorDiagonal), not A's.
   long long operatorDiagonals = 0;
   int levels = 0;
+  /// Hierarchies of more than one level whose finest level MueLu smooths (a PreSmoother or
+  /// PostSmoother on level 0): see "Auxiliary Fine Smoothing".
+  long long fineSmoothedHierarchies = 0;
 };
 /// The statistics of a factory made by twoStagePreconditionerFactory (zeros for another one).
 TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory);
