@@ -212,7 +212,7 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       Teuchos::ParameterList mp = pl.sublist("MueLu");
       mp.set("number of equations", aux.blockSize);
       // The finest level is smoothed by the Chebyshev steps on J; the auxiliary matrix's own
-      // sweeps there cost 15-70 % of a solve for no fewer Krylov iterations on undamaged bodies,
+      // sweeps there cost 12-36 % of a solve for no fewer Krylov iterations on undamaged bodies,
       // but save a third of them on damaged ones (docs/performance.md, session 17). A "level 0"
       // list of the user's MueLu parameters is left as given.
       const std::string fine = pl.get<std::string>("Auxiliary Fine Smoothing");
