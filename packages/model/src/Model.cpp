@@ -51,9 +51,53 @@ struct Model::Impl {
   virtual void addDiagonal(const Model& m, const std::vector<double>& u, double* d) const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
   virtual void invalidate() = 0;
+  Model::ProductForm form = Model::ProductForm::Auto;
 };
 
 namespace {
+
+// The two per-bond loops of the gathered matrix-free product (ImplD::applyAffineGathered): sum
+// the records of a family's members, add one record to each member's. (Clones for AVX2 and
+// AVX-512 were no faster: the loads of the members' records, not the adds, take the time.)
+#define PERINOX_RECORD_CLONES
+template <int N>
+void gatherRecordsImpl(const double* rec, const int* idx, int m, double* out) {
+  double s[N] = {};
+  for (int q = 0; q < m; ++q) {
+    const double* r = rec + static_cast<std::size_t>(idx[q]) * N;
+#pragma GCC unroll 16
+    for (int c = 0; c < N; ++c) s[c] += r[c];
+  }
+  for (int c = 0; c < N; ++c) out[c] = s[c];
+}
+template <int N>
+void scatterRecordImpl(double* rec, const int* idx, int m, const double* add) {
+  for (int q = 0; q < m; ++q) {
+    double* r = rec + static_cast<std::size_t>(idx[q]) * N;
+#pragma GCC unroll 16
+    for (int c = 0; c < N; ++c) r[c] += add[c];
+  }
+}
+void gather6(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<6>(r, i, m, o); }
+void gather12(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<12>(r, i, m, o); }
+void scatter7(double* r, const int* i, int m, const double* a) { scatterRecordImpl<7>(r, i, m, a); }
+void scatter13(double* r, const int* i, int m, const double* a) { scatterRecordImpl<13>(r, i, m, a); }
+void gather2(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<2>(r, i, m, o); }
+void scatter3(double* r, const int* i, int m, const double* a) { scatterRecordImpl<3>(r, i, m, a); }
+template <int N>
+void gatherRecords(const double* r, const int* i, int m, double* o) {
+  static_assert(N == 2 || N == 6 || N == 12);
+  if constexpr (N == 2) gather2(r, i, m, o);
+  else if constexpr (N == 6) gather6(r, i, m, o);
+  else gather12(r, i, m, o);
+}
+template <int N>
+void scatterRecord(double* r, const int* i, int m, const double* a) {
+  static_assert(N == 3 || N == 7 || N == 13);
+  if constexpr (N == 3) scatter3(r, i, m, a);
+  else if constexpr (N == 7) scatter7(r, i, m, a);
+  else scatter13(r, i, m, a);
+}
 
 template <int D>
 struct ImplD final : Model::Impl {
@@ -143,10 +187,14 @@ struct ImplD final : Model::Impl {
     // + k), needs per bond only xi, dY and two short passes (and, with damage, the kept
     // softening of each bond).
     if (!fresh && affine) {
-      applyAffine(model, u, v, jv);
+      if (damage || !linGathered_)
+        applyAffine(model, u, v, jv);
+      else
+        applyAffineGathered(model, v, jv);
       linValid_ = true;
       return;
     }
+    if (fresh && affine && !damage) keepFamilySums(p);
     BondWork<D> w;
     w.cacheFresh = fresh;
     for (int i = 0; i < p.numOwned; ++i) {
@@ -185,6 +233,114 @@ struct ImplD final : Model::Impl {
       }
     }
     linValid_ = true;  // (an evaluation error above leaves it invalid)
+  }
+
+  // Without damage, what the gathered product keeps per owned particle at a state: sum_l V_l
+  // and sum_l V_l xi_l, and the origin positions are taken from (the owned particles' centroid,
+  // so that the sums of positions below lose as few digits as they can).
+  mutable std::vector<double> linVsum_;
+  mutable std::vector<Vec> linGX_;
+  mutable Vec linOrigin_ = Vec::Zero();
+  // Its per-product scratch, per local particle (owned and ghosts): R1 = [V v (x) X, V v] and
+  // R2 = [sum_i V_i A_i, sum_i V_i c_i, sum_i V_i b_i] (see applyAffineGathered).
+  static constexpr int kR1 = D * D + D, kR2 = D * D + 1 + D;
+  mutable std::vector<double> r1_, r2_;
+
+  // Whether repeated products take the gathered form. Auto: in 3D on families of 16 bonds and
+  // more (at 3.015 dx 1.5-1.8x faster than the per-bond form; at 1.015 dx, 6 bonds, 1.1-1.4x
+  // slower; in 2D at 3.015 dx only 1.1-1.4x faster, for sums of positions that lose more digits
+  // on the long bodies 2D runs allow; bench_kernels, docs/performance.md).
+  mutable bool linGathered_ = false;
+  void keepFamilySums(const LocalParticles& p) const {
+    linGathered_ = form == Model::ProductForm::Gathered ||
+                   (form == Model::ProductForm::Auto && D == 3 &&
+                    p.famIndex.size() >= 16 * static_cast<std::size_t>(std::max(p.numOwned, 1)));
+    linVsum_.assign(p.numOwned, 0.0);
+    linGX_.assign(p.numOwned, Vec::Zero());
+    Vec o = Vec::Zero();
+    for (int i = 0; i < p.numOwned; ++i) o += p.X[i].template head<D>();
+    linOrigin_ = p.numOwned > 0 ? Vec(o / p.numOwned) : Vec::Zero();
+    for (int i = 0; i < p.numOwned; ++i)
+      for (auto q = p.famOffset[i]; q < p.famOffset[i + 1]; ++q) {
+        const int j = p.famIndex[q];
+        linVsum_[i] += p.volume[j];
+        linGX_[i] += p.volume[j] * (p.X[j] - p.X[i]).template head<D>();
+      }
+  }
+
+  /// The repeated affine product without damage, rewritten so that a bond costs two short
+  /// passes over per-particle records instead of its own vector algebra. With x_j = X_j - origin:
+  ///   dF_i K_i = S_i = sum_l V_l (v_j - v_i) (x) xi_l = sum_l R1_j[V v (x) x] - (sum_l V_l v_j) (x) x_i - v_i (x) g_i,
+  /// g_i = sum_l V_l xi_l; particle i's own share of the product is
+  ///   -V_i sum_l V_l (A xi_l + c dY_l + k) = -V_i (A g_i + c (sum_l V_l v_j - Vsum_i v_i) + Vsum_i k),
+  /// and bond l's share to j, V_i V_l (A (x_j - x_i) + c (v_j - v_i) + k), is summed over the i
+  /// whose family holds j as V_j (P_j x_j + q_j v_j + b_j) with P_j = sum_i V_i A_i, q_j = sum_i
+  /// V_i c_i and b_j = sum_i V_i (k_i - A_i x_i - c_i v_i). Sums of positions lose about
+  /// log10(body size / horizon) more digits than the per-bond form (tested against it and the
+  /// assembled tangent).
+  void applyAffineGathered(const Model& model, const std::vector<double>& v, double* jv) const {
+    const LocalParticles& p = model.particles();
+    const int n = p.size();
+    r1_.resize(static_cast<std::size_t>(n) * kR1);
+    r2_.assign(static_cast<std::size_t>(n) * kR2, 0.0);
+    for (int j = 0; j < n; ++j) {
+      double* r = r1_.data() + static_cast<std::size_t>(j) * kR1;
+      const double Vj = p.volume[j];
+      for (int a = 0; a < D; ++a) {
+        const double va = Vj * v[j * D + a];
+        for (int b = 0; b < D; ++b) r[a * D + b] = va * (p.X[j][b] - linOrigin_[b]);
+        r[D * D + a] = va;
+      }
+    }
+    BondWork<D> w;
+    for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) continue;
+      const auto b0 = p.famOffset[i], b1 = p.famOffset[i + 1];
+      std::array<double, kR1> sum{};
+      gatherRecords<kR1>(r1_.data(), p.famIndex.data() + b0, static_cast<int>(b1 - b0), sum.data());
+      Vec xi, vi, a;
+      for (int c = 0; c < D; ++c) {
+        xi[c] = p.X[i][c] - linOrigin_[c];
+        vi[c] = v[i * D + c];
+        a[c] = sum[D * D + c];
+      }
+      const Vec& g = linGX_[i];
+      Mat S;
+      for (int r = 0; r < D; ++r)
+        for (int c = 0; c < D; ++c) S(r, c) = sum[r * D + c] - a[r] * xi[c] - vi[r] * g[c];
+      w.i = i;
+      w.m = static_cast<int>(b1 - b0);
+      w.nbr = p.famIndex.data() + b0;
+      w.Vi = p.volume[i];
+      w.Vsum = linVsum_[i];
+      w.VdYsum = a - w.Vsum * vi;
+      w.Kinv = linKinv_[i];
+      w.dF.noalias() = S * w.Kinv;
+      AffineDirectional<D> f;
+      for (std::size_t e = 0; e < effects.size(); ++e) {
+        const int cs = effects[e]->cacheSize();
+        w.cache = cs > 0 ? linCache_[e].data() + static_cast<std::size_t>(i) * cs : nullptr;
+        effects[e]->addAffineDirectional(w, f, nullptr);
+      }
+      const Vec own = f.A * g + f.c * w.VdYsum + w.Vsum * f.k;
+      for (int c = 0; c < D; ++c) jv[i * D + c] -= w.Vi * own[c];
+      std::array<double, kR2> rec;
+      const Vec bi = f.k - f.A * xi - f.c * vi;
+      for (int r = 0; r < D; ++r)
+        for (int c = 0; c < D; ++c) rec[r * D + c] = w.Vi * f.A(r, c);
+      rec[D * D] = w.Vi * f.c;
+      for (int c = 0; c < D; ++c) rec[D * D + 1 + c] = w.Vi * bi[c];
+      scatterRecord<kR2>(r2_.data(), p.famIndex.data() + b0, static_cast<int>(b1 - b0), rec.data());
+    }
+    for (int j = 0; j < n; ++j) {
+      const double* r = r2_.data() + static_cast<std::size_t>(j) * kR2;
+      const double Vj = p.volume[j];
+      for (int a = 0; a < D; ++a) {
+        double s = r[D * D] * v[j * D + a] + r[D * D + 1 + a];
+        for (int b = 0; b < D; ++b) s += r[a * D + b] * (p.X[j][b] - linOrigin_[b]);
+        jv[j * D + a] += Vj * s;
+      }
+    }
   }
 
   /// A repeated product at the kept state whose effects are all affine in the bond: per
@@ -713,6 +869,11 @@ void Model::evaluate(const std::vector<double>& u, ElementSink& sink, bool wantT
 
 void Model::applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const {
   impl_->applyTangent(*this, u, v, jv);
+}
+
+void Model::setProductForm(ProductForm f) {
+  impl_->form = f;
+  impl_->invalidate();
 }
 
 void Model::addJacobianDiagonal(const std::vector<double>& u, double* d) const { impl_->addDiagonal(*this, u, d); }

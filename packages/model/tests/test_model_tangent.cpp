@@ -497,7 +497,8 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       {"average displacement + damage", true, false, false, true, false, true, false},
   };
   for (int dim : {1, 2, 3}) {
-    for (const Case& c : cases) {
+    for (const Case& c : cases)
+    for (const auto form : {Model::ProductForm::PerBond, Model::ProductForm::Gathered}) {
       const double factor = c.sp ? 1.015 : 2.015;
       Discretization d = smallLattice(dim, factor, dim == 1 ? 12 : (dim == 2 ? 7 : 5));
       const int n = d.size(), D = dim;
@@ -506,6 +507,7 @@ TEST(Model, MatrixFreeProductEqualsAssembledTangent) {
       auto lp = localParticles(d, 0, n);
       for (int i = 0; i < n; ++i) lp.modulusScale.push_back(1.0 + 0.3 * std::cos(2.0 * i));
       Model model(m, lp);
+      model.setProductForm(form);
       if (c.sp) model.enableStressPoints(3);
       if (c.corr) model.enableCorrespondence();
       if (c.springs) model.enableControl(ControlSpec{ControlSpec::Kind::Springs, 2.0e9});
@@ -748,5 +750,61 @@ TEST(Blocks, StressPointTangentMatchesFiniteDifferences) {
     const auto [err, asym] = tangentErrors(*model, d, stretchedRotated(d, 41 + dim));
     EXPECT_LT(err, 1e-6) << "dim " << dim;
     EXPECT_LT(asym, 1e-10) << "dim " << dim;
+  }
+}
+
+// The gathered form of the repeated product (sums of per-particle records, positions taken from
+// the owned particles' centroid) against the per-bond form on a body far larger than its
+// horizon and far from the origin, owning a middle slice so that ghosts take scattered shares:
+// for a random direction, a smooth one and a homogeneous stretch (whose product vanishes inside
+// the body, so only cancellation is left there). The gathered sums carry positions of size L
+// (here L / delta = 40) where the per-bond form carries bonds of size delta: about
+// eps L / delta * (family size) = 3e-13 of the largest entry. 1e-11 leaves a margin of 30; the
+// same sums with positions from the global origin, 1e4 away, lose 1e-10 and fail.
+TEST(Model, GatheredProductKeepsDigitsOnLargeBodies) {
+  LatticeSpec s;
+  s.dim = 2;
+  s.counts = {240, 240, 1};
+  s.lower = Vec3(1.0e4, -3.0e3, 0.0);
+  s.upper = s.lower + Vec3(24.0, 24.0, 1.0);
+  s.horizonFactor = 3.015;
+  s.thickness = 0.05;
+  const Discretization d = buildLattice(s);
+  const int n = d.size(), D = 2;
+  const MaterialSpec m = material(2);
+  Model model(m, localParticles(d, n / 3, 2 * n / 3));
+  model.enableCorrespondence();
+  model.enableStabilization({0.3, micromodulusC(m, d.horizon, d.thickness)});
+  const int nl = model.particles().size();
+  std::vector<double> u = randomDisplacement(nl, D, 1e-3 * d.dx, 5);
+  for (int l = 0; l < nl; ++l) u[l * D] += 1e-3 * (model.particles().X[l][0] - s.lower[0]);
+  std::vector<std::vector<double>> dirs(3, std::vector<double>(nl * D));
+  dirs[0] = randomDisplacement(nl, D, 1.0, 11);
+  for (int l = 0; l < nl; ++l) {
+    const Vec3 x = (model.particles().X[l] - s.lower) / 24.0;
+    dirs[1][l * D] = std::sin(3.0 * x[0]) * std::cos(2.0 * x[1]);
+    dirs[1][l * D + 1] = std::cos(x[0] + x[1]);
+    dirs[2][l * D] = 2e-3 * (x[0] - 0.5) + 1e-3 * x[1];
+    dirs[2][l * D + 1] = -1e-3 * x[1];
+  }
+  for (std::size_t k = 0; k < dirs.size(); ++k) {
+    std::vector<double> y[2];
+    int f = 0;
+    for (const auto form : {Model::ProductForm::PerBond, Model::ProductForm::Gathered}) {
+      model.setProductForm(form);
+      std::vector<double> first(nl * D, 0.0);
+      model.applyTangent(u, dirs[(k + 1) % dirs.size()], first.data());  // the fresh product keeps the state
+      y[f].assign(nl * D, 0.0);
+      model.applyTangent(u, dirs[k], y[f].data());
+      ++f;
+    }
+    double diff = 0, big = 0;
+    for (int q = 0; q < nl * D; ++q) {
+      diff = std::max(diff, std::abs(y[1][q] - y[0][q]));
+      big = std::max(big, std::abs(y[0][q]));
+    }
+    ASSERT_GT(big, 0.0) << "direction " << k;
+    EXPECT_LT(diff, 1e-11 * big) << "direction " << k;
+    std::printf("direction %zu: gathered - per-bond = %.3g of the largest entry\n", k, diff / big);
   }
 }

@@ -288,6 +288,13 @@ class Model {
   /// each effect linearises its force states along v. Detached particles are skipped.
   void applyTangent(const std::vector<double>& u, const std::vector<double>& v, double* jv) const;
 
+  /// How a repeated product at one state (every effect affine in the bond, no damage) visits the
+  /// bonds: Auto (Gathered in 3D on families of 16 bonds and more, else PerBond), PerBond (each bond's
+  /// dt_l = A xi_l + c dY_l + k formed) or Gathered (sums of per-particle records, no per-bond
+  /// algebra). The answers agree to round-off; the choice is about speed (docs/performance.md).
+  enum class ProductForm { Auto, PerBond, Gathered };
+  void setProductForm(ProductForm f);
+
   /// Adds the diagonal of df_int/du, summed over the owned elements, to d (local particles *
   /// dim, interleaved): the element tangents' diagonal blocks only, O(family) work per element
   /// instead of O(family^2) (Jacobi scaling of smoothers on the matrix-free Jacobian).
