@@ -57,11 +57,10 @@ struct Model::Impl {
 namespace {
 
 // The two per-bond loops of the gathered matrix-free product (ImplD::applyAffineGathered): sum
-// the records of a family's members, add one record to each member's. (Clones for AVX2 and
-// AVX-512 were no faster: the loads of the members' records, not the adds, take the time.)
-#define PERINOX_RECORD_CLONES
+// the N-double records of a family's members, add one record to each member's. (Clones for AVX2
+// and AVX-512 were no faster: the loads of the members' records, not the adds, take the time.)
 template <int N>
-void gatherRecordsImpl(const double* rec, const int* idx, int m, double* out) {
+void gatherRecords(const double* rec, const int* idx, int m, double* out) {
   double s[N] = {};
   for (int q = 0; q < m; ++q) {
     const double* r = rec + static_cast<std::size_t>(idx[q]) * N;
@@ -71,32 +70,12 @@ void gatherRecordsImpl(const double* rec, const int* idx, int m, double* out) {
   for (int c = 0; c < N; ++c) out[c] = s[c];
 }
 template <int N>
-void scatterRecordImpl(double* rec, const int* idx, int m, const double* add) {
+void scatterRecord(double* rec, const int* idx, int m, const double* add) {
   for (int q = 0; q < m; ++q) {
     double* r = rec + static_cast<std::size_t>(idx[q]) * N;
 #pragma GCC unroll 16
     for (int c = 0; c < N; ++c) r[c] += add[c];
   }
-}
-void gather6(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<6>(r, i, m, o); }
-void gather12(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<12>(r, i, m, o); }
-void scatter7(double* r, const int* i, int m, const double* a) { scatterRecordImpl<7>(r, i, m, a); }
-void scatter13(double* r, const int* i, int m, const double* a) { scatterRecordImpl<13>(r, i, m, a); }
-void gather2(const double* r, const int* i, int m, double* o) { gatherRecordsImpl<2>(r, i, m, o); }
-void scatter3(double* r, const int* i, int m, const double* a) { scatterRecordImpl<3>(r, i, m, a); }
-template <int N>
-void gatherRecords(const double* r, const int* i, int m, double* o) {
-  static_assert(N == 2 || N == 6 || N == 12);
-  if constexpr (N == 2) gather2(r, i, m, o);
-  else if constexpr (N == 6) gather6(r, i, m, o);
-  else gather12(r, i, m, o);
-}
-template <int N>
-void scatterRecord(double* r, const int* i, int m, const double* a) {
-  static_assert(N == 3 || N == 7 || N == 13);
-  if constexpr (N == 3) scatter3(r, i, m, a);
-  else if constexpr (N == 7) scatter7(r, i, m, a);
-  else scatter13(r, i, m, a);
 }
 
 template <int D>
@@ -235,9 +214,9 @@ struct ImplD final : Model::Impl {
     linValid_ = true;  // (an evaluation error above leaves it invalid)
   }
 
-  // Without damage, what the gathered product keeps per owned particle at a state: sum_l V_l
-  // and sum_l V_l xi_l, and the origin positions are taken from (the owned particles' centroid,
-  // so that the sums of positions below lose as few digits as they can).
+  // Without damage, what the gathered product keeps at a state: per owned particle sum_l V_l
+  // and sum_l V_l xi_l, and the origin its positions are taken from (the owned particles'
+  // centroid, so that the sums of positions lose as few digits as they can).
   mutable std::vector<double> linVsum_;
   mutable std::vector<Vec> linGX_;
   mutable Vec linOrigin_ = Vec::Zero();
@@ -255,6 +234,7 @@ struct ImplD final : Model::Impl {
     linGathered_ = form == Model::ProductForm::Gathered ||
                    (form == Model::ProductForm::Auto && D == 3 &&
                     p.famIndex.size() >= 16 * static_cast<std::size_t>(std::max(p.numOwned, 1)));
+    if (!linGathered_) return;
     linVsum_.assign(p.numOwned, 0.0);
     linGX_.assign(p.numOwned, Vec::Zero());
     Vec o = Vec::Zero();
@@ -275,9 +255,10 @@ struct ImplD final : Model::Impl {
   ///   -V_i sum_l V_l (A xi_l + c dY_l + k) = -V_i (A g_i + c (sum_l V_l v_j - Vsum_i v_i) + Vsum_i k),
   /// and bond l's share to j, V_i V_l (A (x_j - x_i) + c (v_j - v_i) + k), is summed over the i
   /// whose family holds j as V_j (P_j x_j + q_j v_j + b_j) with P_j = sum_i V_i A_i, q_j = sum_i
-  /// V_i c_i and b_j = sum_i V_i (k_i - A_i x_i - c_i v_i). Sums of positions lose about
-  /// log10(body size / horizon) more digits than the per-bond form (tested against it and the
-  /// assembled tangent).
+  /// V_i c_i and b_j = sum_i V_i (k_i - A_i x_i - c_i v_i). Sums of positions of size L (from
+  /// the centroid) stand where the per-bond form has bonds of size delta: the gathered form
+  /// loses more digits as L / delta grows, most for a homogeneous stretch, whose product cancels
+  /// inside the body (tested against the per-bond form and the assembled tangent).
   void applyAffineGathered(const Model& model, const std::vector<double>& v, double* jv) const {
     const LocalParticles& p = model.particles();
     const int n = p.size();
