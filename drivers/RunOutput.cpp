@@ -384,6 +384,8 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"operator_diagonals", facts.twoStage.operatorDiagonals},
                            {"levels", facts.twoStage.levels},
                            {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies}};
+  if (facts.mumps.setups > 0)
+    j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
   const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed

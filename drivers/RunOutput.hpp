@@ -8,6 +8,7 @@
 
 #include "Simulation.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/solver/MumpsSolver.hpp"
 #include "perinox/solver/TwoStagePreconditioner.hpp"
 
 namespace perinox {
@@ -26,6 +27,7 @@ struct RunFacts {
   // of three), the unit of the machine-independent cost ratios in docs/performance.md.
   double setupSeconds = 0, solveSeconds = 0, residualSeconds = 0;
   double newtonSeconds = 0;        // the part of the solve inside Newton's solves (load stepping)
+  MumpsPreconditionerStatistics mumps;  // the MUMPS preconditioner's set-ups (zeros for others)
   TwoStageStatistics twoStage;     // the Two-Stage preconditioner's set-ups (zeros for others)
   nlohmann::json partition;        // the partition: method, owned and ghost particles per rank
 };

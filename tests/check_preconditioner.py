@@ -21,6 +21,11 @@ not change (summary.json "preconditioner").
                                                        Krylov iterations per linear solve of RUN_DIR at
                                                        most F times REF_DIR's
 
+    check_preconditioner.py --kept-factors F RUN_DIR  the MUMPS preconditioner (preset gmres-mumps):
+                                                       at most a fraction F of its set-ups factorised,
+                                                       and at most F_max Krylov iterations per solve
+                                                       (--max-per-solve, default 20)
+
 All also require one set-up per linear solve. Counts only.
 """
 import argparse
@@ -35,6 +40,8 @@ ap.add_argument("--eigenvalue-products", type=int, nargs=2, metavar=("FIRST", "W
 ap.add_argument("--krylov-within", type=float)
 ap.add_argument("--own-diagonal", action="store_true")
 ap.add_argument("--fine-smoothed", choices=["all", "none"])
+ap.add_argument("--kept-factors", type=float)
+ap.add_argument("--max-per-solve", type=float, default=20.0)
 ap.add_argument("runs", nargs="+")
 a = ap.parse_args()
 if len(a.runs) != (2 if a.krylov_within is not None else 1):
@@ -54,6 +61,25 @@ def per_solve(run):
 with open(os.path.join(a.run, "summary.json")) as f:
     s = json.load(f)
 p = s.get("preconditioner")
+if a.kept_factors is not None:
+    if not p or p.get("type") != "MUMPS":
+        print("FAILED: no MUMPS preconditioner statistics in summary.json")
+        sys.exit(1)
+    solves = s["linear_solves_total"]
+    per = s["krylov_iterations_total"] / max(solves, 1)
+    print(f"set-ups {p['setups']}, factorisations {p['factorizations']}, linear solves {solves}, "
+          f"Krylov iterations per solve {per:.2f}")
+    if p["setups"] != solves or solves == 0:
+        print("FAILED: set-ups differ from linear solves")
+        sys.exit(1)
+    if p["factorizations"] < 1 or p["factorizations"] > a.kept_factors * p["setups"]:
+        print(f"FAILED: more than {a.kept_factors} of the set-ups factorised (or none)")
+        sys.exit(1)
+    if per > a.max_per_solve:
+        print(f"FAILED: more than {a.max_per_solve} Krylov iterations per solve")
+        sys.exit(1)
+    print("PASSED")
+    sys.exit(0)
 if not p:
     print("FAILED: no Two-Stage preconditioner statistics in summary.json")
     sys.exit(1)

@@ -68,6 +68,7 @@ void registerSolvers(Stratimikos::DefaultLinearSolverBuilder& builder,
   builder.setLinearSolveStrategyFactory(
       Teuchos::abstractFactoryStd<Thyra::LinearOpWithSolveFactoryBase<double>, MumpsLinearOpWithSolveFactory>(),
       "MUMPS");
+  builder.setPreconditioningStrategyFactory(Teuchos::abstractFactoryStd<Base, MumpsPreconditionerFactory>(), "MUMPS");
   builder.setPreconditioningStrategyFactory(Teuchos::rcp(new TwoStageFactoryMaker(auxiliary)), twoStageName());
 }
 }  // namespace

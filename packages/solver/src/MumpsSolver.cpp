@@ -3,7 +3,9 @@
 
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Teuchos_StandardParameterEntryValidators.hpp>
+#include <Thyra_DefaultPreconditioner.hpp>
 #include <Thyra_LinearOpWithSolveBase.hpp>
+#include <Thyra_TpetraLinearOp.hpp>
 #include <Thyra_TpetraThyraWrappers.hpp>
 #include <Tpetra_CrsMatrix.hpp>
 #include <Tpetra_Import.hpp>
@@ -132,6 +134,9 @@ class MumpsContext {
     check("numeric factorization");
     factored_ = true;
   }
+
+  bool factored() const { return factored_; }
+  const Teuchos::RCP<const Map>& rowMap() const { return rowMap_; }
 
   void solve(bool transpose, const MV& B, MV& X) {
     if (!factored_) throw std::logic_error("MUMPS: solve without a factorisation");
@@ -274,6 +279,33 @@ class MumpsLinearOpWithSolve : public Thyra::LinearOpWithSolveBase<double> {
   std::shared_ptr<MumpsContext> context_;
 };
 
+/// The kept factors as a Tpetra operator, y = alpha (LU)^-1 x + beta y, counting its applications.
+class MumpsFactorsOperator final : public Tpetra::Operator<double, int, long long, Node> {
+ public:
+  MumpsFactorsOperator(std::shared_ptr<MumpsContext> context, Teuchos::RCP<const Map> map,
+                       std::shared_ptr<long long> applications)
+      : context_(std::move(context)), map_(std::move(map)), applications_(std::move(applications)) {}
+  Teuchos::RCP<const Map> getDomainMap() const override { return map_; }
+  Teuchos::RCP<const Map> getRangeMap() const override { return map_; }
+  bool hasTransposeApply() const override { return true; }
+  void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
+    ++*applications_;
+    const bool transpose = mode != Teuchos::NO_TRANS;
+    if (alpha == 1.0 && beta == 0.0) {
+      context_->solve(transpose, X, Y);
+      return;
+    }
+    MV z(map_, X.getNumVectors());
+    context_->solve(transpose, X, z);
+    Y.update(alpha, z, beta);
+  }
+
+ private:
+  std::shared_ptr<MumpsContext> context_;
+  Teuchos::RCP<const Map> map_;
+  std::shared_ptr<long long> applications_;
+};
+
 Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& src) {
   auto op = src.getOp();
   if (op.is_null()) return Teuchos::null;
@@ -283,6 +315,7 @@ Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& sr
 
 const char* const kOrdering = "Ordering";
 const char* const kRelaxation = "Memory Relaxation Percent";
+const char* const kRefactor = "Refactor Above Krylov Iterations";
 }  // namespace
 
 MumpsLinearOpWithSolveFactory::MumpsLinearOpWithSolveFactory() = default;
@@ -360,5 +393,108 @@ Teuchos::RCP<const Teuchos::ParameterList> MumpsLinearOpWithSolveFactory::getVal
 }
 
 std::string MumpsLinearOpWithSolveFactory::description() const { return "perinox::MumpsLinearOpWithSolveFactory"; }
+
+// --- the kept factorisation as a preconditioner ---
+
+struct MumpsPreconditionerFactory::State {
+  std::shared_ptr<MumpsContext> context;
+  std::shared_ptr<long long> applications = std::make_shared<long long>(0);
+};
+
+MumpsPreconditionerFactory::MumpsPreconditionerFactory() : state_(std::make_shared<State>()) {}
+MumpsPreconditionerFactory::~MumpsPreconditionerFactory() = default;
+
+bool MumpsPreconditionerFactory::isCompatible(const Thyra::LinearOpSourceBase<double>& src) const {
+  try {
+    return !crsMatrix(src).is_null();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+Teuchos::RCP<Thyra::PreconditionerBase<double>> MumpsPreconditionerFactory::createPrec() const {
+  return Teuchos::rcp(new Thyra::DefaultPreconditioner<double>);
+}
+
+void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& src,
+                                                Thyra::PreconditionerBase<double>* prec,
+                                                const Thyra::ESupportSolveUse) const {
+  TEUCHOS_TEST_FOR_EXCEPT(prec == nullptr || src.is_null());
+  auto A = crsMatrix(*src);
+  if (A.is_null())
+    throw std::invalid_argument(
+        "the MUMPS preconditioner needs an assembled matrix: the assembled Jacobian, or with Solver/Jacobian = "
+        "Matrix-Free a 'Preconditioner Matrix' of Assembled or Neighbours");
+  ++stats_.setups;
+  State& st = *state_;
+  // Refactorise when there are no factors, the rows moved, or the last solve needed more than
+  // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
+  // Krylov solver's iterations are global).
+  const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
+                        !st.context->rowMap()->isSameAs(*A->getRowMap()) || *st.applications > refactorAbove_;
+  if (refactor) {
+    if (!st.context) st.context = std::make_shared<MumpsContext>(A->getComm(), ordering_, memoryRelaxation_);
+    st.context->factor(*A);
+    ++stats_.factorizations;
+  }
+  *st.applications = 0;
+  Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M =
+      Teuchos::rcp(new MumpsFactorsOperator(st.context, A->getRowMap(), st.applications));
+  auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(A->getRowMap());
+  Teuchos::RCP<const Thyra::LinearOpBase<double>> thyraM = Thyra::constTpetraLinearOp<double, int, long long, Node>(
+      space, space, M);
+  auto* def = dynamic_cast<Thyra::DefaultPreconditioner<double>*>(prec);
+  if (def == nullptr) throw std::logic_error("the MUMPS preconditioner needs a Thyra::DefaultPreconditioner");
+  def->initializeUnspecified(thyraM);
+  src_ = src.create_weak();  // the factory must not keep the matrix alive
+}
+
+void MumpsPreconditionerFactory::uninitializePrec(Thyra::PreconditionerBase<double>* prec,
+                                                  Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* src,
+                                                  Thyra::ESupportSolveUse* use) const {
+  if (src) *src = src_.is_valid_ptr() ? src_.create_strong() : Teuchos::null;
+  if (use) *use = Thyra::SUPPORT_SOLVE_UNSPECIFIED;
+  if (auto* def = dynamic_cast<Thyra::DefaultPreconditioner<double>*>(prec)) def->uninitialize();
+}
+
+void MumpsPreconditionerFactory::setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& params) {
+  TEUCHOS_TEST_FOR_EXCEPT(params.is_null());
+  params->validateParametersAndSetDefaults(*getValidParameters());
+  params_ = params;
+  ordering_ = Teuchos::getIntegralValue<int>(*params_, kOrdering);
+  memoryRelaxation_ = params_->get<int>(kRelaxation);
+  refactorAbove_ = params_->get<int>(kRefactor);
+  if (memoryRelaxation_ < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
+  if (refactorAbove_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
+}
+
+Teuchos::RCP<Teuchos::ParameterList> MumpsPreconditionerFactory::getNonconstParameterList() { return params_; }
+
+Teuchos::RCP<Teuchos::ParameterList> MumpsPreconditionerFactory::unsetParameterList() {
+  auto p = params_;
+  params_ = Teuchos::null;
+  return p;
+}
+
+Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getParameterList() const { return params_; }
+
+Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getValidParameters() const {
+  static Teuchos::RCP<Teuchos::ParameterList> valid;
+  if (valid.is_null()) {
+    valid = Teuchos::rcp(new Teuchos::ParameterList(*MumpsLinearOpWithSolveFactory().getValidParameters()));
+    valid->setName("MUMPS");
+    valid->set(kRefactor, 20,
+               "keep the factors while a solve needs at most this many Krylov iterations with them; refactorise at the "
+               "next set-up after one that needed more (0: every set-up)");
+  }
+  return valid;
+}
+
+std::string MumpsPreconditionerFactory::description() const { return "perinox::MumpsPreconditionerFactory"; }
+
+MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {
+  if (auto* f = dynamic_cast<const MumpsPreconditionerFactory*>(&factory)) return f->statistics();
+  return {};
+}
 
 }  // namespace perinox

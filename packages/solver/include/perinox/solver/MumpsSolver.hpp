@@ -13,6 +13,9 @@
 #include <Teuchos_ParameterList.hpp>
 #include <Teuchos_RCP.hpp>
 #include <Thyra_LinearOpWithSolveFactoryBase.hpp>
+#include <Thyra_PreconditionerFactoryBase.hpp>
+
+#include <memory>
 
 namespace perinox {
 
@@ -43,5 +46,51 @@ class MumpsLinearOpWithSolveFactory : public Thyra::LinearOpWithSolveFactoryBase
   int ordering_ = 7;        // MUMPS ICNTL(7): 7 = chosen by MUMPS
   int memoryRelaxation_ = 30;  // ICNTL(14), percent of the estimated working space
 };
+
+/// Set-ups and factorisations of a MUMPS preconditioner (for tests and summary.json).
+struct MumpsPreconditionerStatistics {
+  long long setups = 0, factorizations = 0;
+};
+
+/// MUMPS's LU of the preconditioner matrix as a preconditioner ("Preconditioner Type" = "MUMPS"),
+/// for a Krylov solver on the current Jacobian. The factors are kept across set-ups (Newton
+/// iterations, load steps, broken bonds) while they still precondition well: a set-up refactorises
+/// only when the solve since the previous set-up took more than 'Refactor Above Krylov Iterations'
+/// applications, or the rows changed. Near a damaged state a factorisation costs about a hundred
+/// residual evaluations and a solve with stale factors a few GMRES iterations
+/// (docs/performance.md, "A kept factorisation").
+class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<double> {
+ public:
+  MumpsPreconditionerFactory();
+  ~MumpsPreconditionerFactory() override;
+
+  bool isCompatible(const Thyra::LinearOpSourceBase<double>& fwdOpSrc) const override;
+  Teuchos::RCP<Thyra::PreconditionerBase<double>> createPrec() const override;
+  void initializePrec(const Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>& fwdOpSrc,
+                      Thyra::PreconditionerBase<double>* prec, const Thyra::ESupportSolveUse supportSolveUse) const override;
+  void uninitializePrec(Thyra::PreconditionerBase<double>* prec,
+                        Teuchos::RCP<const Thyra::LinearOpSourceBase<double>>* fwdOpSrc,
+                        Thyra::ESupportSolveUse* supportSolveUse) const override;
+
+  void setParameterList(const Teuchos::RCP<Teuchos::ParameterList>& params) override;
+  Teuchos::RCP<Teuchos::ParameterList> getNonconstParameterList() override;
+  Teuchos::RCP<Teuchos::ParameterList> unsetParameterList() override;
+  Teuchos::RCP<const Teuchos::ParameterList> getParameterList() const override;
+  Teuchos::RCP<const Teuchos::ParameterList> getValidParameters() const override;
+  std::string description() const override;
+
+  const MumpsPreconditionerStatistics& statistics() const { return stats_; }
+
+ private:
+  struct State;
+  Teuchos::RCP<Teuchos::ParameterList> params_;
+  int ordering_ = 7, memoryRelaxation_ = 30, refactorAbove_ = 20;
+  std::shared_ptr<State> state_;  // the factors, the layout they belong to, the applications since the last set-up
+  mutable MumpsPreconditionerStatistics stats_;
+  mutable Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> src_;
+};
+
+/// The statistics of a MumpsPreconditionerFactory (zeros for another factory).
+MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::PreconditionerFactoryBase<double>& factory);
 
 }  // namespace perinox
