@@ -385,7 +385,8 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"levels", facts.twoStage.levels},
                            {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies}};
   if (facts.mumps.setups > 0)
-    j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations}};
+    j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations},
+                           {"self_assembled", facts.mumps.selfAssembled}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
   const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed

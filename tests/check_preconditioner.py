@@ -24,7 +24,9 @@ not change (summary.json "preconditioner").
     check_preconditioner.py --kept-factors F RUN_DIR  the MUMPS preconditioner (preset gmres-mumps):
                                                        at most a fraction F of its set-ups factorised,
                                                        and at most F_max Krylov iterations per solve
-                                                       (--max-per-solve, default 20)
+                                                       (--max-per-solve, default 20); with
+                                                       --self-assembled, every factorisation of a
+                                                       matrix the operator assembled for it
 
 All also require one set-up per linear solve. Counts only.
 """
@@ -42,6 +44,7 @@ ap.add_argument("--own-diagonal", action="store_true")
 ap.add_argument("--fine-smoothed", choices=["all", "none"])
 ap.add_argument("--kept-factors", type=float)
 ap.add_argument("--max-per-solve", type=float, default=20.0)
+ap.add_argument("--self-assembled", action="store_true")
 ap.add_argument("runs", nargs="+")
 a = ap.parse_args()
 if len(a.runs) != (2 if a.krylov_within is not None else 1):
@@ -78,6 +81,11 @@ if a.kept_factors is not None:
     if per > a.max_per_solve:
         print(f"FAILED: more than {a.max_per_solve} Krylov iterations per solve")
         sys.exit(1)
+    if a.self_assembled:
+        print(f"factorisations of a self-assembled matrix {p.get('self_assembled')}, matrix bytes held {s.get('matrix_bytes')}")
+        if p.get("self_assembled") != p["factorizations"]:
+            print("FAILED: a factorisation did not come from the matrix-free operator's own assembly")
+            sys.exit(1)
     print("PASSED")
     sys.exit(0)
 if not p:

@@ -404,7 +404,16 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
     precA_ = Teuchos::null;
     auto op = Thyra::createConstLinearOp<double, LO, GO, Node>(
         Teuchos::rcp_implicit_cast<const Tpetra::Operator<double, LO, GO, Node>>(precJ_), xSpace_, xSpace_);
-    precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
+    // A preconditioner that needs a matrix now and then (the kept MUMPS factorisation) may ask
+    // for the assembled Jacobian at x during this set-up only.
+    precJ_->setAssembly([this, &x]() -> Teuchos::RCP<const TCrsMatrix> { return assembledJacobian(*x, false); });
+    try {
+      precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
+    } catch (...) {
+      precJ_->setAssembly(nullptr);
+      throw;
+    }
+    precJ_->setAssembly(nullptr);
   } else if (!Wprec.is_null()) {
     // The preconditioner: Ifpack2 or MueLu on the assembled Jacobian or on its part that
     // couples direct neighbours only (memory proportional to the family size).

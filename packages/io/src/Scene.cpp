@@ -1818,10 +1818,11 @@ void readLinearSolver(SceneBuild& b) {
     if (s.jacobian != "Matrix-Free")
       fail(file, "'Solver/Preconditioner Matrix' = None hands the preconditioner the analytic matrix-free Jacobian: it needs "
                  "'Solver/Jacobian' = Matrix-Free (got '" + s.jacobian + "')");
-    if (s.linearSolver->get<std::string>("Preconditioner Type", "None") != "Two-Stage")
+    const std::string precType = s.linearSolver->get<std::string>("Preconditioner Type", "None");
+    if (precType != "Two-Stage" && precType != "MUMPS")
       fail(file, "'Solver/Preconditioner Matrix' = None needs a preconditioner that works without a matrix: the preset '" +
-                     s.linearSolverName + "' uses '" + s.linearSolver->get<std::string>("Preconditioner Type", "None") +
-                     "'; use the scalable preset (Two-Stage)");
+                     s.linearSolverName + "' uses '" + precType +
+                     "'; use the scalable preset (Two-Stage) or gmres-mumps (MUMPS, which assembles when it refactorises)");
   }
   if (s.forcingTerm == "Preset") s.forcingTerm = presetForcing;
   if (s.forcingTerm != "Constant" && s.forcingTerm != "Eisenstat-Walker")

@@ -1,6 +1,8 @@
 // MUMPS as a Thyra linear-solve strategy (see MumpsSolver.hpp).
 #include "perinox/solver/MumpsSolver.hpp"
 
+#include "perinox/evaluator/OperatorAssembly.hpp"
+
 #include <Teuchos_DefaultMpiComm.hpp>
 #include <Teuchos_StandardParameterEntryValidators.hpp>
 #include <Thyra_DefaultPreconditioner.hpp>
@@ -404,12 +406,22 @@ struct MumpsPreconditionerFactory::State {
 MumpsPreconditionerFactory::MumpsPreconditionerFactory() : state_(std::make_shared<State>()) {}
 MumpsPreconditionerFactory::~MumpsPreconditionerFactory() = default;
 
-bool MumpsPreconditionerFactory::isCompatible(const Thyra::LinearOpSourceBase<double>& src) const {
+namespace {
+/// The Tpetra operator of a source (null when it is not one).
+Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> tpetraOperator(const Thyra::LinearOpSourceBase<double>& src) {
   try {
-    return !crsMatrix(src).is_null();
+    auto op = src.getOp();
+    return op.is_null() ? Teuchos::null : Extract::getConstTpetraOperator(op);
   } catch (const std::exception&) {
-    return false;
+    return Teuchos::null;
   }
+}
+}  // namespace
+
+bool MumpsPreconditionerFactory::isCompatible(const Thyra::LinearOpSourceBase<double>& src) const {
+  auto op = tpetraOperator(src);
+  return !Teuchos::rcp_dynamic_cast<const Matrix>(op).is_null() ||
+         dynamic_cast<const OperatorAssembly*>(op.get()) != nullptr;
 }
 
 Teuchos::RCP<Thyra::PreconditionerBase<double>> MumpsPreconditionerFactory::createPrec() const {
@@ -420,27 +432,38 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
                                                 Thyra::PreconditionerBase<double>* prec,
                                                 const Thyra::ESupportSolveUse) const {
   TEUCHOS_TEST_FOR_EXCEPT(prec == nullptr || src.is_null());
-  auto A = crsMatrix(*src);
-  if (A.is_null())
+  // An assembled matrix, or an operator that assembles itself when asked (the matrix-free
+  // Jacobian with Preconditioner Matrix = None: assembled only when the factors are renewed).
+  auto op = tpetraOperator(*src);
+  auto A = Teuchos::rcp_dynamic_cast<const Matrix>(op);
+  const auto* lazy = A.is_null() ? dynamic_cast<const OperatorAssembly*>(op.get()) : nullptr;
+  if (A.is_null() && lazy == nullptr)
     throw std::invalid_argument(
         "the MUMPS preconditioner needs an assembled matrix: the assembled Jacobian, or with Solver/Jacobian = "
-        "Matrix-Free a 'Preconditioner Matrix' of Assembled or Neighbours");
+        "Matrix-Free a 'Preconditioner Matrix' of Assembled, Neighbours or None (the Jacobian assembled when refactorised)");
   ++stats_.setups;
   State& st = *state_;
+  const Teuchos::RCP<const Map> rows = op->getRangeMap();
   // Refactorise when there are no factors, the rows moved, or the last solve needed more than
   // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
   // Krylov solver's iterations are global).
   const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
-                        !st.context->rowMap()->isSameAs(*A->getRowMap()) || *st.applications > refactorAbove_;
+                        !st.context->rowMap()->isSameAs(*rows) || *st.applications > refactorAbove_;
   if (refactor) {
+    if (A.is_null()) {
+      A = lazy->assembled();
+      if (A.is_null())
+        throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself (outside a set-up)");
+      ++stats_.selfAssembled;
+    }
     if (!st.context) st.context = std::make_shared<MumpsContext>(A->getComm(), ordering_, memoryRelaxation_);
     st.context->factor(*A);
     ++stats_.factorizations;
   }
   *st.applications = 0;
   Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M =
-      Teuchos::rcp(new MumpsFactorsOperator(st.context, A->getRowMap(), st.applications));
-  auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(A->getRowMap());
+      Teuchos::rcp(new MumpsFactorsOperator(st.context, rows, st.applications));
+  auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(rows);
   Teuchos::RCP<const Thyra::LinearOpBase<double>> thyraM = Thyra::constTpetraLinearOp<double, int, long long, Node>(
       space, space, M);
   auto* def = dynamic_cast<Thyra::DefaultPreconditioner<double>*>(prec);

@@ -4,9 +4,11 @@
 #include <Thyra_ModelEvaluator.hpp>
 #include <Thyra_VectorBase.hpp>
 #include <Tpetra_Operator.hpp>
+#include <functional>
 #include <vector>
 
 #include "perinox/evaluator/Assembly.hpp"
+#include "perinox/evaluator/OperatorAssembly.hpp"
 #include "perinox/evaluator/OperatorDiagonal.hpp"
 
 namespace perinox {
@@ -16,7 +18,7 @@ using TMultiVector = Tpetra::MultiVector<double, LO, GO>;
 
 /// The analytic matrix-free Jacobian: W v = (df_int/du) v from the linearised kernels at the state
 /// set by the last evaluation with W_op (its displacements are kept; nothing is assembled).
-class JacobianOperator final : public TOperator, public OperatorDiagonal {
+class JacobianOperator final : public TOperator, public OperatorDiagonal, public OperatorAssembly {
  public:
   JacobianOperator(const Assembler& assembler, const FrozenDofs& frozen, Teuchos::RCP<const TMap> map)
       : assembler_(assembler), frozen_(frozen), map_(std::move(map)) {}
@@ -28,8 +30,17 @@ class JacobianOperator final : public TOperator, public OperatorDiagonal {
   void apply(const TMultiVector& X, TMultiVector& Y, Teuchos::ETransp mode, double alpha, double beta) const override;
   /// diag(W) at the state, from the element tangents' diagonal blocks (no matrix formed).
   void getDiagonal(TMultiVector& d) const override;
+  /// The assembled Jacobian at the state, by the function the evaluator sets while it sets up a
+  /// preconditioner (null outside that).
+  void setAssembly(std::function<Teuchos::RCP<const Tpetra::CrsMatrix<double, int, long long>>()> f) {
+    assembly_ = std::move(f);
+  }
+  Teuchos::RCP<const Tpetra::CrsMatrix<double, int, long long>> assembled() const override {
+    return assembly_ ? assembly_() : Teuchos::null;
+  }
 
  private:
+  std::function<Teuchos::RCP<const Tpetra::CrsMatrix<double, int, long long>>()> assembly_;
   const Assembler& assembler_;
   const FrozenDofs& frozen_;
   Teuchos::RCP<const TMap> map_;

@@ -50,6 +50,8 @@ class MumpsLinearOpWithSolveFactory : public Thyra::LinearOpWithSolveFactoryBase
 /// Set-ups and factorisations of a MUMPS preconditioner (for tests and summary.json).
 struct MumpsPreconditionerStatistics {
   long long setups = 0, factorizations = 0;
+  /// Factorisations of an operator that assembled itself for them (the matrix-free Jacobian).
+  long long selfAssembled = 0;
 };
 
 /// MUMPS's LU of the preconditioner matrix as a preconditioner ("Preconditioner Type" = "MUMPS"),
