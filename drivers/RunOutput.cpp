@@ -386,7 +386,13 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies}};
   if (facts.mumps.setups > 0)
     j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations},
-                           {"self_assembled", facts.mumps.selfAssembled}};
+                           {"self_assembled", facts.mumps.selfAssembled},
+                           {"factor_precision", facts.mumps.bytesPerEntry == 4 ? "single" : "double"},
+                           {"factor_bytes", facts.mumps.factorBytes},
+                           {"double_precision_fallbacks", facts.mumps.doublePrecisionFallbacks},
+                           {"factorization_s", facts.mumps.factorSeconds},
+                           {"solves", facts.mumps.solves},
+                           {"solve_s", facts.mumps.solveSeconds}};
   j["krylov_iterations_total"] = krylov;
   j["linear_failures_total"] = linearFailures;
   const std::string inexact = inexactSolvesWarning(res.steps);  // "" unless a linear solve failed

@@ -26,7 +26,9 @@ not change (summary.json "preconditioner").
                                                        and at most F_max Krylov iterations per solve
                                                        (--max-per-solve, default 20); with
                                                        --self-assembled, every factorisation of a
-                                                       matrix the operator assembled for it
+                                                       matrix the operator assembled for it; with
+                                                       --factor-precision single|double, factors of
+                                                       that precision (summary.json factor_precision)
 
 All also require one set-up per linear solve. Counts only.
 """
@@ -45,6 +47,7 @@ ap.add_argument("--fine-smoothed", choices=["all", "none"])
 ap.add_argument("--kept-factors", type=float)
 ap.add_argument("--max-per-solve", type=float, default=20.0)
 ap.add_argument("--self-assembled", action="store_true")
+ap.add_argument("--factor-precision", choices=["single", "double"])
 ap.add_argument("runs", nargs="+")
 a = ap.parse_args()
 if len(a.runs) != (2 if a.krylov_within is not None else 1):
@@ -85,6 +88,11 @@ if a.kept_factors is not None:
         print(f"factorisations of a self-assembled matrix {p.get('self_assembled')}, matrix bytes held {s.get('matrix_bytes')}")
         if p.get("self_assembled") != p["factorizations"]:
             print("FAILED: a factorisation did not come from the matrix-free operator's own assembly")
+            sys.exit(1)
+    if a.factor_precision:
+        print(f"factor precision {p.get('factor_precision')}, factor bytes {p.get('factor_bytes')}")
+        if p.get("factor_precision") != a.factor_precision or not p.get("factor_bytes"):
+            print(f"FAILED: expected {a.factor_precision}-precision factors")
             sys.exit(1)
     print("PASSED")
     sys.exit(0)

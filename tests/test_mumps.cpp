@@ -40,8 +40,11 @@ Teuchos::RCP<const Map> makeMap() {
 
 // A diagonally dominant nonsymmetric matrix with banded and far couplings. `variant` changes the
 // values (1) or adds one more far coupling per row (2, a new pattern); `singularRow` >= 0 makes
-// that row a copy of the next one (numerically, not structurally, singular).
-Teuchos::RCP<Matrix> makeMatrix(const Teuchos::RCP<const Map>& map, int variant, int singularRow = -1) {
+// that row a copy of the next one (numerically, not structurally, singular), plus `nudge` on the
+// copied diagonal entry (a nudge below single precision's resolution leaves the matrix singular
+// in single precision only).
+Teuchos::RCP<Matrix> makeMatrix(const Teuchos::RCP<const Map>& map, int variant, int singularRow = -1,
+                                double nudge = 0.0) {
   auto A = Teuchos::rcp(new Matrix(map, 8));
   auto rowEntries = [&](int i, std::vector<std::pair<int, double>>& e) {
     e.clear();
@@ -75,7 +78,7 @@ Teuchos::RCP<Matrix> makeMatrix(const Teuchos::RCP<const Map>& map, int variant,
     Teuchos::Array<double> vals;
     for (auto& [c, v] : e) {
       cols.push_back(gid(c));
-      vals.push_back(v);
+      vals.push_back(i == singularRow && c == i + 1 ? v + nudge : v);
     }
     A->insertGlobalValues(gid(i), cols(), vals());
   }
@@ -218,4 +221,74 @@ TEST(LinearSolverFactory, PerinoxKeysOfAPresetAreAcceptedAndTyposRefused) {
   auto bad = Teuchos::rcp(new Teuchos::ParameterList(*p));
   bad->set("Forcing Term", "Sometimes");
   refused([&] { perinox::validateLinearSolverList(*bad, "the test list"); }, "Sometimes");
+}
+
+namespace {
+// The kept factors of A as a preconditioner (MumpsPreconditionerFactory, 'Factor Precision' =
+// precision), applied to b = A x_true: the error of M b against x_true, and the statistics.
+double preconditionerError(const std::string& precision, perinox::MumpsPreconditionerStatistics& stats,
+                           int singularRow = -1, double nudge = 0.0) {
+  auto map = makeMap();
+  auto A = makeMatrix(map, 0, singularRow, nudge);
+  perinox::MumpsPreconditionerFactory f;
+  auto p = Teuchos::rcp(new Teuchos::ParameterList("MUMPS"));
+  p->set("Factor Precision", precision);
+  f.setParameterList(p);
+  auto prec = f.createPrec();
+  f.initializePrec(source(A), prec.get(), Thyra::SUPPORT_SOLVE_UNSPECIFIED);
+  auto xTrue = exact(map);
+  auto b = Teuchos::rcp(new MV(map, 2));
+  A->apply(*xTrue, *b);
+  auto x = Teuchos::rcp(new MV(map, 2));
+  auto tb = Thyra::createMultiVector<double>(b);
+  auto tx = Thyra::createMultiVector<double>(x);
+  Thyra::apply<double>(*prec->getUnspecifiedPrecOp(), Thyra::NOTRANS, *tb, tx.ptr());
+  stats = f.statistics();
+  return relativeError(*x, *xTrue);
+}
+}  // namespace
+
+// Single-precision factors solve to single precision (unit round-off 6e-8 times a condition
+// number below 10, so between 1e-9 and 1e-5: above 1e-9 only if the factors really are single),
+// in half the bytes of the double-precision factors of the same matrix; double to kTol.
+TEST(MumpsPreconditioner, SinglePrecisionFactorsHoldHalfTheBytesAndSolveToSinglePrecision) {
+  perinox::MumpsPreconditionerStatistics d, s;
+  const double errDouble = preconditionerError("Double", d);
+  const double errSingle = preconditionerError("Single", s);
+  EXPECT_LT(errDouble, kTol);
+  EXPECT_GT(errSingle, 1e-9);
+  EXPECT_LT(errSingle, 1e-5);
+  EXPECT_EQ(d.factorizations, 1);
+  EXPECT_EQ(s.factorizations, 1);
+  EXPECT_EQ(d.bytesPerEntry, 8);
+  EXPECT_EQ(s.bytesPerEntry, 4);
+  EXPECT_GT(d.factorBytes, 8 * N);  // at least the diagonal
+  EXPECT_EQ(2 * s.factorBytes, d.factorBytes);
+  EXPECT_EQ(s.solves, 1);  // one application (two right-hand sides)
+}
+
+TEST(MumpsPreconditioner, UnknownPrecisionIsRefused) {
+  perinox::MumpsPreconditionerFactory f;
+  auto p = Teuchos::rcp(new Teuchos::ParameterList("MUMPS"));
+  p->set("Factor Precision", "Half");
+  EXPECT_THROW(f.setParameterList(p), std::exception);
+}
+
+// A matrix that is singular in single precision only (two rows equal but for 1e-9 on a diagonal
+// entry of size 6, below single precision's resolution there) is factorised in double precision
+// instead: no failure, one fallback, double-precision factors.
+TEST(MumpsPreconditioner, MatrixSingularInSinglePrecisionFallsBackToDouble) {
+  perinox::MumpsPreconditionerStatistics s;
+  const double err = preconditionerError("Single", s, 20, 1e-9);
+  EXPECT_EQ(s.doublePrecisionFallbacks, 1);
+  EXPECT_EQ(s.factorizations, 1);
+  EXPECT_EQ(s.bytesPerEntry, 8);
+  EXPECT_LT(err, 1e-3);  // condition number about 1e10: double precision keeps about 6 digits
+  // Without the nudge the matrix is singular in double precision too: refused, naming it.
+  try {
+    preconditionerError("Single", s, 20, 0.0);
+    ADD_FAILURE() << "a singular matrix was factorised";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("singular"), std::string::npos) << e.what();
+  }
 }

@@ -13,8 +13,11 @@
 #include <Tpetra_Import.hpp>
 #include <Tpetra_MultiVector.hpp>
 #include <dmumps_c.h>
+#include <smumps_c.h>
 #include <mpi.h>
 
+#include <algorithm>
+#include <chrono>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -57,14 +60,42 @@ MPI_Comm rawComm(const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
 // One MUMPS instance: the analysis of one sparsity pattern and the factors of the last matrix.
 class MumpsContext {
  public:
-  MumpsContext(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, int ordering, int memoryRelaxation)
+  virtual ~MumpsContext() = default;
+  virtual void factor(const Matrix& A) = 0;
+  virtual bool factored() const = 0;
+  virtual const Teuchos::RCP<const Map>& rowMap() const = 0;
+  /// X = A^-1 B (A^-T B when transposed), in the factors' precision.
+  virtual void solve(bool transpose, const MV& B, MV& X) = 0;
+  /// The last factorisation's entries on all ranks (MUMPS's INFOG(29)) and the bytes of each.
+  virtual long long factorEntries() const = 0;
+  virtual int bytesPerEntry() const = 0;
+};
+
+// MUMPS's double- and single-precision real interfaces (libdmumps, libsmumps): the same
+// structure with other scalar types. Single precision halves the factors' bytes, and a solve with
+// them reads half as much memory (a preconditioner's solves are memory-bound).
+struct DoublePrecision {
+  using Struct = DMUMPS_STRUC_C;
+  using Real = double;
+  static void call(Struct& id) { dmumps_c(&id); }
+};
+struct SinglePrecision {
+  using Struct = SMUMPS_STRUC_C;
+  using Real = float;
+  static void call(Struct& id) { smumps_c(&id); }
+};
+
+template <class P>
+class MumpsContextT final : public MumpsContext {
+ public:
+  MumpsContextT(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, int ordering, int memoryRelaxation)
       : comm_(rawComm(comm)) {
     MPI_Comm_rank(comm_, &rank_);
     id_.par = 1;  // rank 0 works too
     id_.sym = 0;  // general (the tangent is not symmetric)
     id_.comm_fortran = static_cast<MUMPS_INT>(MPI_Comm_c2f(comm_));
     id_.job = -1;
-    dmumps_c(&id_);
+    P::call(id_);
     if (id_.infog[0] < 0) throw std::runtime_error("MUMPS: initialisation failed: " + mumpsMessage(id_.infog[0], id_.infog[1]));
     id_.icntl[0] = -1;  // no MUMPS printing: failures are reported by perinox
     id_.icntl[1] = -1;
@@ -74,14 +105,15 @@ class MumpsContext {
     id_.icntl[13] = memoryRelaxation;  // ICNTL(14)
     id_.icntl[17] = 3;                 // ICNTL(18): distributed assembled input
   }
-  ~MumpsContext() {
-    id_.job = -2;
-    dmumps_c(&id_);
-  }
-  MumpsContext(const MumpsContext&) = delete;
-  MumpsContext& operator=(const MumpsContext&) = delete;
 
-  void factor(const Matrix& A) {
+  ~MumpsContextT() override {
+    id_.job = -2;
+    P::call(id_);
+  }
+  MumpsContextT(const MumpsContextT&) = delete;
+  MumpsContextT& operator=(const MumpsContextT&) = delete;
+
+  void factor(const Matrix& A) override {
     const auto rowMap = A.getRowMap();
     if (!A.getDomainMap()->isSameAs(*rowMap) || !A.getRangeMap()->isSameAs(*rowMap))
       throw std::invalid_argument("MUMPS: the matrix's domain and range must be its row layout (perinox's Jacobians are)");
@@ -103,7 +135,7 @@ class MumpsContext {
       for (auto k = lcl.graph.row_map(r); k < lcl.graph.row_map(r + 1); ++k) {
         irn[k] = row;
         jcn[k] = static_cast<MUMPS_INT>(colNumber[lcl.graph.entries(k)]);
-        a_[k] = lcl.values(k);
+        a_[k] = static_cast<typename P::Real>(lcl.values(k));
       }
     }
     // The analysis (ordering, symbolic factorisation) is kept while no rank's pattern changes.
@@ -128,7 +160,7 @@ class MumpsContext {
     factored_ = false;
     for (int attempt = 0;; ++attempt) {
       id_.job = 2;
-      dmumps_c(&id_);
+      P::call(id_);
       const int e = id_.infog[0];
       if (!((e == -8 || e == -9 || e == -14 || e == -15) && attempt < 4)) break;
       id_.icntl[13] *= 2;
@@ -137,10 +169,15 @@ class MumpsContext {
     factored_ = true;
   }
 
-  bool factored() const { return factored_; }
-  const Teuchos::RCP<const Map>& rowMap() const { return rowMap_; }
+  bool factored() const override { return factored_; }
+  long long factorEntries() const override {
+    const long long e = id_.infog[28];  // negative: millions of entries
+    return e >= 0 ? e : -e * 1000000LL;
+  }
+  int bytesPerEntry() const override { return static_cast<int>(sizeof(typename P::Real)); }
+  const Teuchos::RCP<const Map>& rowMap() const override { return rowMap_; }
 
-  void solve(bool transpose, const MV& B, MV& X) {
+  void solve(bool transpose, const MV& B, MV& X) override {
     if (!factored_) throw std::logic_error("MUMPS: solve without a factorisation");
     if (!B.getMap()->isSameAs(*rowMap_) || !X.getMap()->isSameAs(*rowMap_))
       throw std::invalid_argument("MUMPS: the vectors' layout differs from the matrix's rows");
@@ -149,10 +186,10 @@ class MumpsContext {
     root.doImport(B, *toRoot_, Tpetra::INSERT);
     const std::size_t n = static_cast<std::size_t>(id_.n);
     if (rank_ == 0) {
-      rhs_.assign(n * nrhs, 0.0);
+      rhs_.assign(n * nrhs, 0);
       for (std::size_t j = 0; j < nrhs; ++j) {
         auto col = root.getData(j);
-        std::copy(col.begin(), col.end(), rhs_.begin() + j * n);
+        for (std::size_t i = 0; i < n; ++i) rhs_[j * n + i] = static_cast<typename P::Real>(col[i]);
       }
       id_.rhs = rhs_.data();
       id_.nrhs = static_cast<MUMPS_INT>(nrhs);
@@ -163,7 +200,7 @@ class MumpsContext {
     if (rank_ == 0) {
       for (std::size_t j = 0; j < nrhs; ++j) {
         auto col = root.getDataNonConst(j);
-        std::copy(rhs_.begin() + j * n, rhs_.begin() + (j + 1) * n, col.begin());
+        for (std::size_t i = 0; i < n; ++i) col[i] = static_cast<double>(rhs_[j * n + i]);
       }
     }
     X.doExport(root, *toRoot_, Tpetra::INSERT);
@@ -210,7 +247,7 @@ class MumpsContext {
 
   void call(int job, const char* what) {
     id_.job = job;
-    dmumps_c(&id_);
+    P::call(id_);
     check(what);
   }
   void check(const char* what) const {
@@ -220,9 +257,9 @@ class MumpsContext {
 
   MPI_Comm comm_;
   int rank_ = 0;
-  DMUMPS_STRUC_C id_{};
+  typename P::Struct id_{};
   std::vector<MUMPS_INT> irn_, jcn_;
-  std::vector<double> a_, rhs_;
+  std::vector<typename P::Real> a_, rhs_;
   long long rowOffset_ = 0;
   Teuchos::RCP<MV> rowNumber_, colNumber_;  // MUMPS's 1-based numbers of the rows and local columns
   bool analysed_ = false, factored_ = false;
@@ -281,31 +318,43 @@ class MumpsLinearOpWithSolve : public Thyra::LinearOpWithSolveBase<double> {
   std::shared_ptr<MumpsContext> context_;
 };
 
+/// How the kept factors were used: applications since the last set-up and in all, and the time
+/// their solves took.
+struct FactorsUsage {
+  long long sinceSetup = 0, total = 0;
+  double solveSeconds = 0;
+};
+
+double seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
 /// The kept factors as a Tpetra operator, y = alpha (LU)^-1 x + beta y, counting its applications.
 class MumpsFactorsOperator final : public Tpetra::Operator<double, int, long long, Node> {
  public:
   MumpsFactorsOperator(std::shared_ptr<MumpsContext> context, Teuchos::RCP<const Map> map,
-                       std::shared_ptr<long long> applications)
-      : context_(std::move(context)), map_(std::move(map)), applications_(std::move(applications)) {}
+                       std::shared_ptr<FactorsUsage> usage)
+      : context_(std::move(context)), map_(std::move(map)), usage_(std::move(usage)) {}
   Teuchos::RCP<const Map> getDomainMap() const override { return map_; }
   Teuchos::RCP<const Map> getRangeMap() const override { return map_; }
   bool hasTransposeApply() const override { return true; }
   void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
-    ++*applications_;
+    ++usage_->sinceSetup;
+    ++usage_->total;
+    const double t0 = seconds();
     const bool transpose = mode != Teuchos::NO_TRANS;
     if (alpha == 1.0 && beta == 0.0) {
       context_->solve(transpose, X, Y);
-      return;
+    } else {
+      MV z(map_, X.getNumVectors());
+      context_->solve(transpose, X, z);
+      Y.update(alpha, z, beta);
     }
-    MV z(map_, X.getNumVectors());
-    context_->solve(transpose, X, z);
-    Y.update(alpha, z, beta);
+    usage_->solveSeconds += seconds() - t0;
   }
 
  private:
   std::shared_ptr<MumpsContext> context_;
   Teuchos::RCP<const Map> map_;
-  std::shared_ptr<long long> applications_;
+  std::shared_ptr<FactorsUsage> usage_;
 };
 
 Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& src) {
@@ -318,6 +367,7 @@ Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& sr
 const char* const kOrdering = "Ordering";
 const char* const kRelaxation = "Memory Relaxation Percent";
 const char* const kRefactor = "Refactor Above Krylov Iterations";
+const char* const kPrecision = "Factor Precision";
 }  // namespace
 
 MumpsLinearOpWithSolveFactory::MumpsLinearOpWithSolveFactory() = default;
@@ -343,7 +393,7 @@ void MumpsLinearOpWithSolveFactory::initializeOp(const Teuchos::RCP<const Thyra:
     throw std::invalid_argument("MUMPS needs an assembled Tpetra::CrsMatrix (set 'Solver/Jacobian' to Assembled)");
   auto& lows = Teuchos::dyn_cast<MumpsLinearOpWithSolve>(*op);
   auto context = lows.context();
-  if (!context) context = std::make_shared<MumpsContext>(A->getComm(), ordering_, memoryRelaxation_);
+  if (!context) context = std::make_shared<MumpsContextT<DoublePrecision>>(A->getComm(), ordering_, memoryRelaxation_);
   context->factor(*A);
   lows.initialize(src->getOp(), src, context);
 }
@@ -399,8 +449,10 @@ std::string MumpsLinearOpWithSolveFactory::description() const { return "perinox
 // --- the kept factorisation as a preconditioner ---
 
 struct MumpsPreconditionerFactory::State {
-  std::shared_ptr<MumpsContext> context;
-  std::shared_ptr<long long> applications = std::make_shared<long long>(0);
+  // The factors in use: those of the configured precision (primary), or of the double-precision
+  // fallback when the primary's factorisation failed.
+  std::shared_ptr<MumpsContext> context, primary, fallback;
+  std::shared_ptr<FactorsUsage> usage = std::make_shared<FactorsUsage>();
 };
 
 MumpsPreconditionerFactory::MumpsPreconditionerFactory() : state_(std::make_shared<State>()) {}
@@ -448,7 +500,7 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
   // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
   // Krylov solver's iterations are global).
   const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
-                        !st.context->rowMap()->isSameAs(*rows) || *st.applications > refactorAbove_;
+                        !st.context->rowMap()->isSameAs(*rows) || st.usage->sinceSetup > refactorAbove_;
   if (refactor) {
     if (A.is_null()) {
       A = lazy->assembled();
@@ -456,13 +508,33 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
         throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself (outside a set-up)");
       ++stats_.selfAssembled;
     }
-    if (!st.context) st.context = std::make_shared<MumpsContext>(A->getComm(), ordering_, memoryRelaxation_);
-    st.context->factor(*A);
+    auto make = [&](bool single) -> std::shared_ptr<MumpsContext> {
+      if (single) return std::make_shared<MumpsContextT<SinglePrecision>>(A->getComm(), ordering_, memoryRelaxation_);
+      return std::make_shared<MumpsContextT<DoublePrecision>>(A->getComm(), ordering_, memoryRelaxation_);
+    };
+    const double t0 = seconds();
+    if (!st.primary) st.primary = make(singlePrecision_);
+    try {
+      st.primary->factor(*A);
+      st.context = st.primary;
+    } catch (const std::runtime_error&) {
+      // A matrix that is singular in single precision (a pivot lost to its rounding, near a limit
+      // point) is factorised in double precision this time; an error there is the caller's.
+      // Every rank throws together (MUMPS's INFOG is global), so every rank falls back.
+      if (!singlePrecision_) throw;
+      if (!st.fallback) st.fallback = make(false);
+      st.fallback->factor(*A);
+      st.context = st.fallback;
+      ++stats_.doublePrecisionFallbacks;
+    }
+    stats_.factorSeconds += seconds() - t0;
     ++stats_.factorizations;
+    stats_.factorBytes = std::max(stats_.factorBytes, st.context->factorEntries() * st.context->bytesPerEntry());
+    stats_.bytesPerEntry = st.context->bytesPerEntry();
   }
-  *st.applications = 0;
+  st.usage->sinceSetup = 0;
   Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M =
-      Teuchos::rcp(new MumpsFactorsOperator(st.context, rows, st.applications));
+      Teuchos::rcp(new MumpsFactorsOperator(st.context, rows, st.usage));
   auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(rows);
   Teuchos::RCP<const Thyra::LinearOpBase<double>> thyraM = Thyra::constTpetraLinearOp<double, int, long long, Node>(
       space, space, M);
@@ -487,6 +559,7 @@ void MumpsPreconditionerFactory::setParameterList(const Teuchos::RCP<Teuchos::Pa
   ordering_ = Teuchos::getIntegralValue<int>(*params_, kOrdering);
   memoryRelaxation_ = params_->get<int>(kRelaxation);
   refactorAbove_ = params_->get<int>(kRefactor);
+  singlePrecision_ = params_->get<std::string>(kPrecision) == "Single";
   if (memoryRelaxation_ < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
   if (refactorAbove_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
 }
@@ -509,11 +582,22 @@ Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getValidP
     valid->set(kRefactor, 20,
                "keep the factors while a solve needs at most this many Krylov iterations with them; refactorise at the "
                "next set-up after one that needed more (0: every set-up)");
+    valid->set(kPrecision, "Double",
+               "precision of the kept factors: Double, or Single (MUMPS's single-precision interface: half the bytes, "
+               "and solves that read half as much; the Krylov solver still converges in double precision)",
+               Teuchos::rcp(new Teuchos::StringValidator(Teuchos::tuple<std::string>("Double", "Single"))));
   }
   return valid;
 }
 
 std::string MumpsPreconditionerFactory::description() const { return "perinox::MumpsPreconditionerFactory"; }
+
+MumpsPreconditionerStatistics MumpsPreconditionerFactory::statistics() const {
+  MumpsPreconditionerStatistics s = stats_;
+  s.solves = state_->usage->total;
+  s.solveSeconds = state_->usage->solveSeconds;
+  return s;
+}
 
 MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {
   if (auto* f = dynamic_cast<const MumpsPreconditionerFactory*>(&factory)) return f->statistics();

@@ -52,6 +52,17 @@ struct MumpsPreconditionerStatistics {
   long long setups = 0, factorizations = 0;
   /// Factorisations of an operator that assembled itself for them (the matrix-free Jacobian).
   long long selfAssembled = 0;
+  /// The largest factorisation's bytes on all ranks, and the bytes of one entry (8 or 4: 'Factor
+  /// Precision' Double or Single).
+  long long factorBytes = 0;
+  int bytesPerEntry = 0;
+  /// Applications of the factors (one per Krylov iteration) and the time of their solves, and the
+  /// time of the factorisations (seconds on rank 0; for summary.json, never for tests).
+  long long solves = 0;
+  double solveSeconds = 0, factorSeconds = 0;
+  /// Single-precision factorisations that failed (singular at that precision) and were redone in
+  /// double precision.
+  long long doublePrecisionFallbacks = 0;
 };
 
 /// MUMPS's LU of the preconditioner matrix as a preconditioner ("Preconditioner Type" = "MUMPS"),
@@ -81,12 +92,13 @@ class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<doubl
   Teuchos::RCP<const Teuchos::ParameterList> getValidParameters() const override;
   std::string description() const override;
 
-  const MumpsPreconditionerStatistics& statistics() const { return stats_; }
+  MumpsPreconditionerStatistics statistics() const;
 
  private:
   struct State;
   Teuchos::RCP<Teuchos::ParameterList> params_;
   int ordering_ = 7, memoryRelaxation_ = 30, refactorAbove_ = 20;
+  bool singlePrecision_ = false;  // 'Factor Precision' = Single
   std::shared_ptr<State> state_;  // the factors, the layout they belong to, the applications since the last set-up
   mutable MumpsPreconditionerStatistics stats_;
   mutable Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> src_;
