@@ -204,6 +204,8 @@ class LoadStepper {
   NewtonResult solveWithCutbacks(Thyra::VectorBase<double>& x, StepRecord& rec, int& cut,
                                  const Thyra::VectorBase<double>* firstTangent);
   void breakAtStall(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double stepIncrement);
+  void retryWithoutPredictor(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, int& cut,
+                             double stepIncrement);
   bool breakAfterConvergence(Thyra::VectorBase<double>& x, StepRecord& rec, NewtonResult& nr, double tStep);
   bool vetted(const StepRecord& rec, const NewtonResult& nr, const Thyra::VectorBase<double>& x, double previous);
   void accept(const Thyra::VectorBase<double>& x, const StepRecord& rec, const NewtonResult& nr, double previous);
