@@ -383,7 +383,8 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"eigenvalue_products", facts.twoStage.eigenvalueProducts},
                            {"operator_diagonals", facts.twoStage.operatorDiagonals},
                            {"levels", facts.twoStage.levels},
-                           {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies}};
+                           {"fine_smoothed_hierarchies", facts.twoStage.fineSmoothedHierarchies},
+                           {"coarse_entry_hierarchies", facts.twoStage.coarseEntryHierarchies}};
   if (facts.mumps.setups > 0)
     j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations},
                            {"self_assembled", facts.mumps.selfAssembled},

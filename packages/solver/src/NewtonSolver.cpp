@@ -46,10 +46,14 @@ std::string stagnationDiagnosis(const std::vector<double>& r, int window) {
 /// reports SOLVE_STATUS_UNCONVERGED at its iteration limit or on breakdown; NOX then carries
 /// on with the inexact direction because of "Rescue Bad Newton Solve").
 CountingGroup::CountingGroup(const CountingGroup& source, NOX::CopyType type)
-    : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_), stats_(source.stats_) {}
+    : NOX::Thyra::Group(source, type), tolerance_(source.tolerance_), floor_(source.floor_), stats_(source.stats_) {}
 
 NOX::Abstract::Group::ReturnType CountingGroup::computeNewton(Teuchos::ParameterList& p) {
   last_linear_solve_num_iters_ = 0;  // direct solvers leave it untouched
+  if (floor_) {
+    const double floor = floor_();
+    if (floor > p.get<double>("Tolerance", tolerance_)) p.set("Tolerance", floor);
+  }
   const auto st = NOX::Thyra::Group::computeNewton(p);
   ++stats_->counts.solves;
   stats_->counts.krylovIterations += std::max(0, last_linear_solve_num_iters_);
@@ -336,6 +340,20 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
   std::string failure;
   try {
     group = countingGroup(model_, x, options_.linearTolerance);
+    if (options_.forcingTerm == "Eisenstat-Walker") {
+      // Eisenstat-Walker asks for 0.9 (|R_k| / |R_k-1|)^2, which at the last iteration of a
+      // step solves far beyond the Newton tolerance (|R| 1e-7 -> 1e-12 for a tolerance of 1e-10).
+      // A linear residual of a tenth of the tolerance is enough there: the system is solved to
+      // at least 0.1 tol / r_k, capped at the forcing term's maximum (Kelley's safeguard,
+      // "Iterative Methods for Linear and Nonlinear Equations", 6.3; docs/performance.md,
+      // session 21).
+      const double cap = std::max(1e-4, options_.linearTolerance);
+      group->setForcingFloor([residual = tests.residual, cap] {
+        const double r = residual->last();
+        if (!(r > 0) || !std::isfinite(r)) return 0.0;
+        return std::min(cap, 0.1 * residual->tolerance() / r);
+      });
+    }
     group->computeF();  // the inexact trust-region solver asks for |F| before computing it
     auto solver = NOX::Solver::buildSolver(group, tests.combo, params);
     status = solver->solve();

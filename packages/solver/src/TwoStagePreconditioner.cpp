@@ -7,6 +7,9 @@
 
 #include <Ifpack2_Factory.hpp>
 #include <MueLu_CreateTpetraPreconditioner.hpp>
+#include <MueLu_Level.hpp>
+#include <Xpetra_MultiVectorFactory.hpp>
+#include <Xpetra_TpetraMultiVector.hpp>
 #include <Thyra_DefaultPreconditioner.hpp>
 #include <Thyra_TpetraLinearOp.hpp>
 #include <Teuchos_StandardParameterEntryValidators.hpp>
@@ -65,6 +68,68 @@ class FreeRestriction final : public OP {
   RCP<const TMap> free_;
   std::vector<LO> freeToAll_;
   mutable RCP<MV> xa_, ya_;
+};
+
+/// MueLu's V-cycle from a zero guess, entered at level 1 when the finest level has no smoother:
+/// there the finest level's residual is the right-hand side itself, which MueLu's own apply
+/// computes anyway as B - A 0, a product with the widest matrix of the hierarchy (on Peridigm's
+/// tensile test 18 % of the run: docs/performance.md, session 21). Restrict, cycle from level 1,
+/// prolongate: the same arithmetic as MueLu's (B - A 0 = B and 0 + P x = P x exactly).
+class CoarseEntryCycle final : public OP {
+ public:
+  using Hierarchy = MueLu::Hierarchy<double, LO, GO, Node>;
+  using XMV = Xpetra::MultiVector<double, LO, GO, Node>;
+  using XTMV = Xpetra::TpetraMultiVector<double, LO, GO, Node>;
+  using XOp = Xpetra::Operator<double, LO, GO, Node>;
+
+  CoarseEntryCycle(RCP<MueLu::TpetraOperator<double, LO, GO, Node>> muelu) : muelu_(std::move(muelu)) {
+    auto H = muelu_->GetHierarchy();
+    auto L1 = H->GetLevel(1);
+    P_ = L1->IsAvailable("Pbar") ? L1->Get<RCP<XOp>>("Pbar") : L1->Get<RCP<XOp>>("P");
+    if (!H->GetImplicitTranspose()) R_ = L1->Get<RCP<XOp>>("R");
+    Ac_ = L1->Get<RCP<XOp>>("A");
+  }
+  /// Whether the hierarchy's cycle may be entered at level 1: more than one level, no smoother on
+  /// level 0, and no import between levels 0 and 1 (a repartitioned level 1 may need one; then
+  /// MueLu's own apply is used).
+  static bool applies(const MueLu::TpetraOperator<double, LO, GO, Node>& muelu) {
+    auto H = muelu.GetHierarchy();
+    if (H.is_null() || H->GetNumLevels() < 2) return false;
+    auto L0 = H->GetLevel(0), L1 = H->GetLevel(1);
+    return !L0->IsAvailable("PreSmoother") && !L0->IsAvailable("PostSmoother") && !L1->IsAvailable("Importer") &&
+           L1->IsAvailable("P") && L1->IsAvailable("A") && (H->GetImplicitTranspose() || L1->IsAvailable("R"));
+  }
+  RCP<const TMap> getDomainMap() const override { return muelu_->getDomainMap(); }
+  RCP<const TMap> getRangeMap() const override { return muelu_->getRangeMap(); }
+  void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
+    if (mode != Teuchos::NO_TRANS) throw std::logic_error("the auxiliary V-cycle has no transpose");
+    const size_t nv = X.getNumVectors();
+    if (rhs_.is_null() || rhs_->getNumVectors() != nv) {
+      rhs_ = Xpetra::MultiVectorFactory<double, LO, GO, Node>::Build(P_->getDomainMap(), nv);
+      cx_ = Xpetra::MultiVectorFactory<double, LO, GO, Node>::Build(P_->getDomainMap(), nv);
+    }
+    const XTMV x(Teuchos::rcpFromRef(const_cast<MV&>(X)));
+    XTMV y(Teuchos::rcpFromRef(Y));
+    if (R_.is_null())
+      P_->apply(x, *rhs_, Teuchos::TRANS, 1.0, 0.0);
+    else
+      R_->apply(x, *rhs_, Teuchos::NO_TRANS, 1.0, 0.0);
+    cx_->putScalar(0.0);
+    if (!Ac_.is_null()) {
+      const auto xMap = cx_->getMap(), rMap = rhs_->getMap();
+      rhs_->replaceMap(Ac_->getRangeMap());
+      cx_->replaceMap(Ac_->getDomainMap());
+      muelu_->GetHierarchy()->Iterate(*rhs_, *cx_, 1, true, 1);
+      cx_->replaceMap(xMap);
+      rhs_->replaceMap(rMap);
+    }
+    P_->apply(*cx_, y, Teuchos::NO_TRANS, alpha, beta);
+  }
+
+ private:
+  RCP<MueLu::TpetraOperator<double, LO, GO, Node>> muelu_;
+  RCP<XOp> P_, R_, Ac_;
+  mutable RCP<XMV> rhs_, cx_;
 };
 
 /// y = S r; y += V (r - J y); y += S (r - J y)   (S and V applied with a zero initial guess).
@@ -243,7 +308,12 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       ++stats_.hierarchiesBuilt;
       version_ = aux.version;
       auxMatrix_ = aux.matrix;
-      coarse_ = rcp(new FreeRestriction(hierarchy_, rows, aux.freeToAll));
+      RCP<const OP> cycle = hierarchy_;
+      if (CoarseEntryCycle::applies(*hierarchy_)) {
+        cycle = rcp(new CoarseEntryCycle(hierarchy_));
+        ++stats_.coarseEntryHierarchies;
+      }
+      coarse_ = rcp(new FreeRestriction(cycle, rows, aux.freeToAll));
       dinv_ = Teuchos::null;  // the diagonal scaling of the operator smoother follows the auxiliary matrix
     }
     RCP<const OP> S;
@@ -439,6 +509,13 @@ Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
     Teuchos::RCP<const Tpetra::Operator<double, int, long long>> J, Teuchos::RCP<const Tpetra::Operator<double, int, long long>> S,
     Teuchos::RCP<const Tpetra::Operator<double, int, long long>> V) {
   return rcp(new TwoStageOperator(std::move(J), std::move(S), std::move(V)));
+}
+
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> auxiliaryCycle(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy) {
+  auto muelu = Teuchos::rcp_dynamic_cast<const MueLu::TpetraOperator<double, LO, GO, Node>>(hierarchy);
+  if (muelu.is_null() || !CoarseEntryCycle::applies(*muelu)) return hierarchy;
+  return rcp(new CoarseEntryCycle(Teuchos::rcp_const_cast<MueLu::TpetraOperator<double, LO, GO, Node>>(muelu)));
 }
 
 TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {

@@ -16,6 +16,8 @@
 #include <NOX_StatusTest_Generic.H>
 #include <NOX_StatusTest_MaxIters.H>
 #include <NOX_Thyra_Group.H>
+#include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -38,6 +40,11 @@ class CountingGroup final : public NOX::Thyra::Group {
   Teuchos::RCP<NOX::Abstract::Group> clone(NOX::CopyType type) const override;
   /// The relative residual a linear solve must reach to count as converged.
   void setTolerance(double t) { tolerance_ = t; }
+  /// A lower bound on each solve's relative tolerance, asked before the solve: a Newton system
+  /// is not solved more tightly than this even when the forcing term asks it (NewtonSolver uses
+  /// it with Eisenstat-Walker so the last system of a step is solved only as far as the Newton
+  /// tolerance needs). Empty: the forcing term's tolerance as it is.
+  void setForcingFloor(std::function<double()> floor) { floor_ = std::move(floor); }
   int failures() const { return stats_->failures; }
   double lastAchieved() const { return stats_->lastTol; }
   int lastIterations() const { return stats_->lastIters; }
@@ -51,6 +58,7 @@ class CountingGroup final : public NOX::Thyra::Group {
     LinearSolveCounts counts;
   };
   double tolerance_ = 0;
+  std::function<double()> floor_;
   std::shared_ptr<Stats> stats_ = std::make_shared<Stats>();
 };
 
@@ -67,6 +75,9 @@ class NormalizedResidualTest final : public NOX::StatusTest::Generic {
   std::vector<double> history() const;
   bool reactionNormalised() const { return reaction_; }
   double scale() const { return scale_; }
+  /// The normalised residual of the iterate checked last (NaN before the first check).
+  double last() const { return history_.empty() ? std::nan("") : history_.rbegin()->second; }
+  double tolerance() const { return tol_; }
   bool atFloor() const { return atFloor_; }
   double floorNormalised() const { return floor_ / scale_; }
   const std::string& stagnation() const { return stagnation_; }

@@ -96,6 +96,13 @@ Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
     Teuchos::RCP<const Tpetra::Operator<double, int, long long>> S,
     Teuchos::RCP<const Tpetra::Operator<double, int, long long>> V);
 
+/// ... and the V-cycle of a MueLu hierarchy (a MueLu::TpetraOperator) as the factory applies it:
+/// entered at level 1 when the finest level has no smoother (its residual from a zero guess is the
+/// right-hand side: no product with the finest matrix), else the hierarchy itself. The same
+/// numbers as the hierarchy's own apply.
+Teuchos::RCP<const Tpetra::Operator<double, int, long long>> auxiliaryCycle(
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy);
+
 /// Statistics of the factory's set-ups (for tests and reports): hierarchies built and reused.
 struct TwoStageStatistics {
   long long setups = 0, hierarchiesBuilt = 0;
@@ -107,6 +114,9 @@ struct TwoStageStatistics {
   /// Hierarchies of more than one level whose finest level MueLu smooths (a PreSmoother or
   /// PostSmoother on level 0): see "Auxiliary Fine Smoothing".
   long long fineSmoothedHierarchies = 0;
+  /// Hierarchies whose V-cycle is entered at level 1 (auxiliaryCycle): no product with the
+  /// auxiliary matrix in an application.
+  long long coarseEntryHierarchies = 0;
 };
 /// The statistics of a factory made by twoStagePreconditionerFactory (zeros for another one).
 TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory);
