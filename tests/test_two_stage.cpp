@@ -1,12 +1,14 @@
 // The auxiliary V-cycle as the Two-Stage preconditioner applies it (auxiliaryCycle): entered at
 // level 1 when MueLu's finest level has no smoother, it must give exactly the numbers of the
 // hierarchy's own apply (which forms the finest residual B - A 0 with a product the shortcut
-// skips). A 3D vector Laplacian (3 equations a node, a three-level hierarchy), on 1 and 2 ranks;
-// with a smoothed finest level, and with the hierarchy on one level only, auxiliaryCycle must
-// hand back the hierarchy itself.
+// skips). A 3D vector Laplacian (3 equations a node, a three-level hierarchy), on 1 and 2 ranks,
+// also with the coarse levels repartitioned onto one rank (an import between levels 0 and 1, as
+// the Two-Stage preconditioner asks on several ranks); with a smoothed finest level, and with the
+// hierarchy on one level only, auxiliaryCycle must hand back the hierarchy itself.
 #include <gtest/gtest.h>
 
 #include <MueLu_CreateTpetraPreconditioner.hpp>
+#include <MueLu_Level.hpp>
 #include <Teuchos_DefaultComm.hpp>
 #include <Tpetra_Core.hpp>
 #include <Tpetra_CrsMatrix.hpp>
@@ -56,7 +58,7 @@ Teuchos::RCP<Matrix> makeMatrix() {
   return A;
 }
 
-Teuchos::RCP<OP> hierarchy(const Teuchos::RCP<Matrix>& A, bool smoothFinest, int maxLevels) {
+Teuchos::ParameterList parameters(bool smoothFinest, int maxLevels, bool repartition) {
   Teuchos::ParameterList p;
   p.set("verbosity", "none");
   p.set("number of equations", 3);
@@ -64,6 +66,34 @@ Teuchos::RCP<OP> hierarchy(const Teuchos::RCP<Matrix>& A, bool smoothFinest, int
   p.set("coarse: max size", 100);
   p.set("smoother: type", "CHEBYSHEV");
   if (!smoothFinest) p.sublist("level 0").set("smoother: pre or post", "none");
+  if (repartition) {  // the Two-Stage preconditioner's settings on several ranks, all moved to one
+    p.set("repartition: enable", true);
+    p.set("repartition: min rows per proc", 100000);
+    p.set("repartition: start level", 1);
+    p.set("repartition: partitioner", "zoltan2");
+    p.sublist("repartition: params").set("algorithm", "multijagged");
+  }
+  return p;
+}
+
+// The nodes' coordinates on the node map (rows / 3; each rank's rows hold whole nodes), which
+// the repartitioner needs.
+Teuchos::RCP<MV> coordinates(const Teuchos::RCP<Matrix>& A) {
+  const auto rows = A->getRowMap();
+  const std::size_t local = rows->getNodeNumElements() / 3;
+  auto nodes = Teuchos::rcp(new Map(static_cast<Tpetra::global_size_t>(M) * M * M, local, 0, rows->getComm()));
+  auto c = Teuchos::rcp(new MV(nodes, 3));
+  for (std::size_t l = 0; l < local; ++l) {
+    const long long node = nodes->getGlobalElement(static_cast<int>(l));
+    c->replaceLocalValue(static_cast<int>(l), 0, static_cast<double>(node % M));
+    c->replaceLocalValue(static_cast<int>(l), 1, static_cast<double>((node / M) % M));
+    c->replaceLocalValue(static_cast<int>(l), 2, static_cast<double>(node / (M * M)));
+  }
+  return c;
+}
+
+Teuchos::RCP<OP> hierarchy(const Teuchos::RCP<Matrix>& A, Teuchos::ParameterList p) {
+  p.sublist("user data").set("Coordinates", coordinates(A));
   Teuchos::RCP<OP> op = A;
   return MueLu::CreateTpetraPreconditioner<double, int, long long, Node>(op, p);
 }
@@ -82,10 +112,18 @@ double maxDifference(const MV& a, const MV& b, double& scale) {
 }
 }  // namespace
 
-TEST(AuxiliaryCycle, EnteredAtLevelOneGivesTheHierarchysOwnNumbers) {
+void expectTheHierarchysOwnNumbers(bool repartition) {
   auto A = makeMatrix();
-  auto H = hierarchy(A, false, 3);
-  auto cycle = perinox::auxiliaryCycle(H);
+  const auto p = parameters(false, 3, repartition);
+  auto H = hierarchy(A, p);
+  if (repartition && A->getComm()->getSize() > 1) {
+    // The case this test is for: level 1 reached through an import (MueLu's default keeps P and R
+    // unrebalanced).
+    auto muelu = Teuchos::rcp_dynamic_cast<MueLu::TpetraOperator<double, int, long long, Node>>(H);
+    ASSERT_FALSE(muelu.is_null());
+    ASSERT_TRUE(muelu->GetHierarchy()->GetLevel(1)->IsAvailable("Importer"));
+  }
+  auto cycle = perinox::auxiliaryCycle(H, p);
   ASSERT_NE(cycle.get(), H.get()) << "an unsmoothed finest level must be skipped";
   MV b(A->getRangeMap(), 1), own(A->getDomainMap(), 1), shortcut(A->getDomainMap(), 1);
   b.randomize();
@@ -107,11 +145,16 @@ TEST(AuxiliaryCycle, EnteredAtLevelOneGivesTheHierarchysOwnNumbers) {
   EXPECT_LE(maxDifference(want, y, scale), 1e-14 * scale);
 }
 
+TEST(AuxiliaryCycle, EnteredAtLevelOneGivesTheHierarchysOwnNumbers) { expectTheHierarchysOwnNumbers(false); }
+
+TEST(AuxiliaryCycle, EnteredAtLevelOneWithRepartitionedCoarseLevels) { expectTheHierarchysOwnNumbers(true); }
+
 TEST(AuxiliaryCycle, SmoothedFinestLevelOrSingleLevelIsLeftToMueLu) {
   auto A = makeMatrix();
-  auto smoothed = hierarchy(A, true, 3);
-  EXPECT_EQ(perinox::auxiliaryCycle(smoothed).get(), smoothed.get());
-  auto single = hierarchy(A, false, 1);
-  EXPECT_EQ(perinox::auxiliaryCycle(single).get(), single.get());
-  EXPECT_EQ(perinox::auxiliaryCycle(A).get(), A.get());  // not a MueLu hierarchy
+  const auto ps = parameters(true, 3, false), p1 = parameters(false, 1, false);
+  auto smoothed = hierarchy(A, ps);
+  EXPECT_EQ(perinox::auxiliaryCycle(smoothed, ps).get(), smoothed.get());
+  auto single = hierarchy(A, p1);
+  EXPECT_EQ(perinox::auxiliaryCycle(single, p1).get(), single.get());
+  EXPECT_EQ(perinox::auxiliaryCycle(A, p1).get(), A.get());  // not a MueLu hierarchy
 }

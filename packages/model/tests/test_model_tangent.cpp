@@ -87,6 +87,20 @@ std::pair<double, double> tangentErrors(const Model& model, const Discretization
   return {(s.K - Kfd).cwiseAbs().maxCoeff() / scale, (s.K - s.K.transpose()).cwiseAbs().maxCoeff() / scale};
 }
 
+/// The matrix-free product J v against an assembled tangent K: max |J v - K v| and max |K v|.
+std::pair<double, double> productDifference(const Model& model, const Eigen::MatrixXd& K, const std::vector<double>& u,
+                                            const std::vector<double>& v) {
+  const int N = static_cast<int>(v.size());
+  Eigen::VectorXd ve(N);
+  for (int k = 0; k < N; ++k) ve[k] = v[k];
+  const Eigen::VectorXd r = K * ve;
+  std::vector<double> y(N, 0.0);
+  model.applyTangent(u, v, y.data());
+  double dd = 0;
+  for (int k = 0; k < N; ++k) dd = std::max(dd, std::abs(y[k] - r[k]));
+  return {dd, r.cwiseAbs().maxCoeff()};
+}
+
 struct Case {
   int dim;
   double factor;
@@ -731,15 +745,9 @@ TEST(Blocks, MatrixFreeProductEqualsAssembledTangent) {
       const auto v = randomDisplacement(n, D, 1.0, 23);
       DenseSink ss(D, n);
       model->evaluate(u, ss, true);
-      Eigen::VectorXd ve(n * D);
-      for (int k = 0; k < n * D; ++k) ve[k] = v[k];
-      const Eigen::VectorXd r = ss.K * ve;
-      std::vector<double> y(n * D, 0.0);
-      model->applyTangent(u, v, y.data());
-      double dd = 0;
-      for (int k = 0; k < n * D; ++k) dd = std::max(dd, std::abs(y[k] - r[k]));
-      ASSERT_GT(r.cwiseAbs().maxCoeff(), 0.0);
-      EXPECT_LT(dd, 1e-12 * r.cwiseAbs().maxCoeff()) << "dim " << dim << ", variant " << variant;
+      const auto [dd, scale] = productDifference(*model, ss.K, u, v);
+      ASSERT_GT(scale, 0.0);
+      EXPECT_LT(dd, 1e-12 * scale) << "dim " << dim << ", variant " << variant;
     }
 }
 
@@ -807,5 +815,46 @@ TEST(Model, GatheredProductKeepsDigitsOnLargeBodies) {
     ASSERT_GT(big, 0.0) << "direction " << k;
     EXPECT_LT(diff, 1e-11 * big) << "direction " << k;
     std::printf("direction %zu: gathered - per-bond = %.3g of the largest entry\n", k, diff / big);
+  }
+}
+
+// An irregular body like Peridigm's tensile test (docs/performance.md, session 21): 3D particles
+// jittered by up to 0.3 spacings with volumes varying by +-30 %, horizon 2.52 spacings, weak
+// stabilisation (G = 0.02), at a small-strain state (0.5 % stretch plus noise) and at a large one.
+// The element tangent against central differences (1e-6, as TangentFD), and both forms of the
+// matrix-free product (per bond and gathered), each at a first and a second direction of one
+// state, against the assembled tangent (1e-12, as MatrixFreeProductEqualsAssembledTangent). The
+// lattice tests above have regular positions and equal volumes.
+TEST(Model, IrregularBodyTangentAndProducts) {
+  LatticeSpec s;
+  s.dim = 3;
+  s.counts = {7, 6, 5};
+  s.upper = Vec3(0.7, 0.6, 0.5);
+  s.horizonFactor = 2.52;
+  s.jitter = 0.3;
+  Discretization d = buildLattice(s);
+  for (int i = 0; i < d.size(); ++i) d.volume[i] *= 1.0 + 0.3 * std::sin(3.7 * i);
+  const int n = d.size(), D = 3;
+  const MaterialSpec m = material(3);
+  for (double stretch : {0.005, 0.2}) {
+    auto u = randomDisplacement(n, D, (stretch < 0.01 ? 0.001 : 0.03) * d.dx, 41);
+    for (int i = 0; i < n; ++i) u[i * D + 1] += stretch * d.X[i][1];
+    auto model = makeModel(d, m, 0.02);
+    const auto [err, asym] = tangentErrors(*model, d, u);
+    EXPECT_LT(err, 1e-6) << "stretch " << stretch;
+    EXPECT_LT(asym, 1e-10) << "stretch " << stretch;
+    DenseSink ss(D, n);
+    model->evaluate(u, ss, true);
+    for (const auto form : {Model::ProductForm::PerBond, Model::ProductForm::Gathered}) {
+      auto mf = makeModel(d, m, 0.02);
+      mf->setProductForm(form);
+      for (unsigned seed : {23u, 29u}) {
+        const auto [dd, scale] = productDifference(*mf, ss.K, u, randomDisplacement(n, D, 1.0, seed));
+        ASSERT_GT(scale, 0.0);
+        EXPECT_LT(dd, 1e-12 * scale)
+            << "stretch " << stretch << ", " << (form == Model::ProductForm::Gathered ? "gathered" : "per bond")
+            << " product, direction " << seed;
+      }
+    }
   }
 }

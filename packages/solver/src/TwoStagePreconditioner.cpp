@@ -8,6 +8,8 @@
 #include <Ifpack2_Factory.hpp>
 #include <MueLu_CreateTpetraPreconditioner.hpp>
 #include <MueLu_Level.hpp>
+#include <MueLu_MasterList.hpp>
+#include <Xpetra_Import.hpp>
 #include <Xpetra_MultiVectorFactory.hpp>
 #include <Xpetra_TpetraMultiVector.hpp>
 #include <Thyra_DefaultPreconditioner.hpp>
@@ -73,31 +75,35 @@ class FreeRestriction final : public OP {
 /// MueLu's V-cycle from a zero guess, entered at level 1 when the finest level has no smoother:
 /// there the finest level's residual is the right-hand side itself, which MueLu's own apply
 /// computes anyway as B - A 0, a product with the widest matrix of the hierarchy (on Peridigm's
-/// tensile test 18 % of the run: docs/performance.md, session 21). Restrict, cycle from level 1,
-/// prolongate: the same arithmetic as MueLu's (B - A 0 = B and 0 + P x = P x exactly).
+/// tensile test 18 % of the run: docs/performance.md, session 21). Restrict, move to the
+/// repartitioned level 1 when MueLu would (an "Importer" there and P and R not rebalanced),
+/// cycle from level 1, move back, prolongate: the same arithmetic as MueLu's (B - A 0 = B and
+/// 0 + P x = P x exactly).
 class CoarseEntryCycle final : public OP {
  public:
   using Hierarchy = MueLu::Hierarchy<double, LO, GO, Node>;
   using XMV = Xpetra::MultiVector<double, LO, GO, Node>;
   using XTMV = Xpetra::TpetraMultiVector<double, LO, GO, Node>;
   using XOp = Xpetra::Operator<double, LO, GO, Node>;
+  using XImport = Xpetra::Import<LO, GO, Node>;
 
-  CoarseEntryCycle(RCP<MueLu::TpetraOperator<double, LO, GO, Node>> muelu) : muelu_(std::move(muelu)) {
+  CoarseEntryCycle(RCP<MueLu::TpetraOperator<double, LO, GO, Node>> muelu, bool transfersRebalanced)
+      : muelu_(std::move(muelu)) {
     auto H = muelu_->GetHierarchy();
     auto L1 = H->GetLevel(1);
     P_ = L1->IsAvailable("Pbar") ? L1->Get<RCP<XOp>>("Pbar") : L1->Get<RCP<XOp>>("P");
     if (!H->GetImplicitTranspose()) R_ = L1->Get<RCP<XOp>>("R");
     Ac_ = L1->Get<RCP<XOp>>("A");
+    if (!transfersRebalanced && L1->IsAvailable("Importer")) importer_ = L1->Get<RCP<const XImport>>("Importer");
   }
-  /// Whether the hierarchy's cycle may be entered at level 1: more than one level, no smoother on
-  /// level 0, and no import between levels 0 and 1 (a repartitioned level 1 may need one; then
-  /// MueLu's own apply is used).
+  /// Whether the hierarchy's cycle may be entered at level 1: more than one level and no
+  /// smoother on level 0.
   static bool applies(const MueLu::TpetraOperator<double, LO, GO, Node>& muelu) {
     auto H = muelu.GetHierarchy();
     if (H.is_null() || H->GetNumLevels() < 2) return false;
     auto L0 = H->GetLevel(0), L1 = H->GetLevel(1);
-    return !L0->IsAvailable("PreSmoother") && !L0->IsAvailable("PostSmoother") && !L1->IsAvailable("Importer") &&
-           L1->IsAvailable("P") && L1->IsAvailable("A") && (H->GetImplicitTranspose() || L1->IsAvailable("R"));
+    return !L0->IsAvailable("PreSmoother") && !L0->IsAvailable("PostSmoother") && L1->IsAvailable("P") &&
+           L1->IsAvailable("A") && (H->GetImplicitTranspose() || L1->IsAvailable("R"));
   }
   RCP<const TMap> getDomainMap() const override { return muelu_->getDomainMap(); }
   RCP<const TMap> getRangeMap() const override { return muelu_->getRangeMap(); }
@@ -105,8 +111,13 @@ class CoarseEntryCycle final : public OP {
     if (mode != Teuchos::NO_TRANS) throw std::logic_error("the auxiliary V-cycle has no transpose");
     const size_t nv = X.getNumVectors();
     if (rhs_.is_null() || rhs_->getNumVectors() != nv) {
-      rhs_ = Xpetra::MultiVectorFactory<double, LO, GO, Node>::Build(P_->getDomainMap(), nv);
-      cx_ = Xpetra::MultiVectorFactory<double, LO, GO, Node>::Build(P_->getDomainMap(), nv);
+      using Factory = Xpetra::MultiVectorFactory<double, LO, GO, Node>;
+      rhs_ = Factory::Build(R_.is_null() ? P_->getDomainMap() : R_->getRangeMap(), nv);
+      cx_ = Factory::Build(P_->getDomainMap(), nv);
+      if (!importer_.is_null()) {
+        rhsMoved_ = Factory::Build(importer_->getTargetMap(), nv);
+        cxMoved_ = Factory::Build(importer_->getTargetMap(), nv);
+      }
     }
     const XTMV x(Teuchos::rcpFromRef(const_cast<MV&>(X)));
     XTMV y(Teuchos::rcpFromRef(Y));
@@ -114,22 +125,30 @@ class CoarseEntryCycle final : public OP {
       P_->apply(x, *rhs_, Teuchos::TRANS, 1.0, 0.0);
     else
       R_->apply(x, *rhs_, Teuchos::NO_TRANS, 1.0, 0.0);
-    cx_->putScalar(0.0);
-    if (!Ac_.is_null()) {
-      const auto xMap = cx_->getMap(), rMap = rhs_->getMap();
-      rhs_->replaceMap(Ac_->getRangeMap());
-      cx_->replaceMap(Ac_->getDomainMap());
-      muelu_->GetHierarchy()->Iterate(*rhs_, *cx_, 1, true, 1);
-      cx_->replaceMap(xMap);
-      rhs_->replaceMap(rMap);
+    RCP<XMV> rhs = rhs_, cx = cx_;
+    if (!importer_.is_null()) {
+      rhsMoved_->doImport(*rhs_, *importer_, Xpetra::INSERT);
+      rhs = rhsMoved_;
+      cx = cxMoved_;
     }
+    cx->putScalar(0.0);
+    if (!Ac_.is_null()) {  // null on a rank that holds nothing of the repartitioned level
+      const auto xMap = cx->getMap(), rMap = rhs->getMap();
+      rhs->replaceMap(Ac_->getRangeMap());
+      cx->replaceMap(Ac_->getDomainMap());
+      muelu_->GetHierarchy()->Iterate(*rhs, *cx, 1, true, 1);
+      cx->replaceMap(xMap);
+      rhs->replaceMap(rMap);
+    }
+    if (!importer_.is_null()) cx_->doExport(*cxMoved_, *importer_, Xpetra::INSERT);
     P_->apply(*cx_, y, Teuchos::NO_TRANS, alpha, beta);
   }
 
  private:
   RCP<MueLu::TpetraOperator<double, LO, GO, Node>> muelu_;
   RCP<XOp> P_, R_, Ac_;
-  mutable RCP<XMV> rhs_, cx_;
+  RCP<const XImport> importer_;
+  mutable RCP<XMV> rhs_, cx_, rhsMoved_, cxMoved_;
 };
 
 /// y = S r; y += V (r - J y); y += S (r - J y)   (S and V applied with a zero initial guess).
@@ -310,7 +329,9 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       auxMatrix_ = aux.matrix;
       RCP<const OP> cycle = hierarchy_;
       if (CoarseEntryCycle::applies(*hierarchy_)) {
-        cycle = rcp(new CoarseEntryCycle(hierarchy_));
+        const bool rebalanced =
+            mp.get<bool>("repartition: rebalance P and R", MueLu::MasterList::getDefault<bool>("repartition: rebalance P and R"));
+        cycle = rcp(new CoarseEntryCycle(hierarchy_, rebalanced));
         ++stats_.coarseEntryHierarchies;
       }
       coarse_ = rcp(new FreeRestriction(cycle, rows, aux.freeToAll));
@@ -512,10 +533,13 @@ Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
 }
 
 Teuchos::RCP<const Tpetra::Operator<double, int, long long>> auxiliaryCycle(
-    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy) {
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy, const Teuchos::ParameterList& mueluParameters) {
   auto muelu = Teuchos::rcp_dynamic_cast<const MueLu::TpetraOperator<double, LO, GO, Node>>(hierarchy);
   if (muelu.is_null() || !CoarseEntryCycle::applies(*muelu)) return hierarchy;
-  return rcp(new CoarseEntryCycle(Teuchos::rcp_const_cast<MueLu::TpetraOperator<double, LO, GO, Node>>(muelu)));
+  const char* key = "repartition: rebalance P and R";
+  const bool rebalanced = mueluParameters.isType<bool>(key) ? mueluParameters.get<bool>(key)
+                                                             : MueLu::MasterList::getDefault<bool>(key);
+  return rcp(new CoarseEntryCycle(Teuchos::rcp_const_cast<MueLu::TpetraOperator<double, LO, GO, Node>>(muelu), rebalanced));
 }
 
 TwoStageStatistics twoStageStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {

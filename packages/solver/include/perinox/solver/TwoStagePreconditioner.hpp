@@ -99,9 +99,11 @@ Teuchos::RCP<const Tpetra::Operator<double, int, long long>> twoStageOperator(
 /// ... and the V-cycle of a MueLu hierarchy (a MueLu::TpetraOperator) as the factory applies it:
 /// entered at level 1 when the finest level has no smoother (its residual from a zero guess is the
 /// right-hand side: no product with the finest matrix), else the hierarchy itself. The same
-/// numbers as the hierarchy's own apply.
+/// numbers as the hierarchy's own apply. mueluParameters: the list the hierarchy was built from
+/// (its "repartition: rebalance P and R" says whether a repartitioned level 1 is reached by an
+/// import, as MueLu does, or not).
 Teuchos::RCP<const Tpetra::Operator<double, int, long long>> auxiliaryCycle(
-    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy);
+    Teuchos::RCP<const Tpetra::Operator<double, int, long long>> hierarchy, const Teuchos::ParameterList& mueluParameters);
 
 /// Statistics of the factory's set-ups (for tests and reports): hierarchies built and reused.
 struct TwoStageStatistics {
