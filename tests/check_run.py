@@ -80,6 +80,8 @@ def main():
     ap.add_argument("--work-counts", choices=["direct", "krylov"],
                     help="check the recorded solver work: totals equal the sums over steps, a linear solve "
                          "for every Newton iteration, and Krylov iterations (>= 1 a solve) or none (direct)")
+    ap.add_argument("--max-krylov", type=int,
+                    help="with --work-counts krylov: at most this many Krylov iterations in all (a count, not a time)")
     ap.add_argument("--png", nargs="+", default=[])
     ap.add_argument("--linear-failures", choices=["none", "some"],
                     help="with --work-counts: no linear solve, or at least one, recorded as unconverged")
@@ -189,6 +191,8 @@ def main():
             fail(f"a direct solver recorded {s['krylov_iterations_total']} Krylov iterations")
         if a.work_counts == "krylov" and not s["krylov_iterations_total"] >= s["linear_solves_total"] > 0:
             fail(f"{s['krylov_iterations_total']} Krylov iterations for {s['linear_solves_total']} solves")
+        if a.max_krylov is not None and s["krylov_iterations_total"] > a.max_krylov:
+            fail(f"{s['krylov_iterations_total']} Krylov iterations in all, more than {a.max_krylov}")
         failures = s["linear_failures_total"]
         if a.linear_failures == "none" and failures != 0:
             fail(f"{failures} linear solves recorded as unconverged, expected none")
