@@ -46,20 +46,16 @@ void residual(const PeridynamicEvaluator& ev, const Teuchos::RCP<const Thyra::Ve
   ev.evalModel(in, out);
 }
 
-// W v with the evaluator's Jacobian operator at x.
-Teuchos::RCP<Thyra::VectorBase<double>> product(PeridynamicEvaluator& ev, const Teuchos::RCP<const Thyra::VectorBase<double>>& x,
-                                                const Thyra::VectorBase<double>& v) {
+// The evaluator's Jacobian operator at x (assembled, or the matrix-free product's linearisation).
+Teuchos::RCP<Thyra::LinearOpBase<double>> jacobian(const PeridynamicEvaluator& ev,
+                                                   const Teuchos::RCP<const Thyra::VectorBase<double>>& x) {
   auto W = ev.create_W_op();
-  auto f = Thyra::createMember(ev.get_f_space());
   auto in = ev.createInArgs();
   in.set_x(x);
   auto out = ev.createOutArgs();
-  out.set_f(f);
   out.set_W_op(W);
   ev.evalModel(in, out);
-  auto y = Thyra::createMember(ev.get_f_space());
-  Thyra::apply(*W, Thyra::NOTRANS, v, y.ptr());
-  return y;
+  return W;
 }
 }  // namespace
 
@@ -104,10 +100,12 @@ int main(int argc, char** argv) {
       ev->setLoadFactor(load);
       auto x = Thyra::createMember(ev->get_x_space());
       randomFill(*ev, *x, 1, amplitude * dx);
+      const auto W = jacobian(*ev, x);
       for (int k = 0; k < directions; ++k) {
         auto v = Thyra::createMember(ev->get_x_space());
         randomFill(*ev, *v, 2 + k, dx);
-        const auto Wv = product(*ev, x, *v);
+        auto Wv = Thyra::createMember(ev->get_f_space());
+        Thyra::apply(*W, Thyra::NOTRANS, *v, Wv.ptr());
         auto xp = x->clone_v(), xm = x->clone_v();
         Thyra::Vp_StV(xp.ptr(), step, *v);
         Thyra::Vp_StV(xm.ptr(), -step, *v);

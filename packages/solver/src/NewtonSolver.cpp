@@ -183,6 +183,12 @@ NewtonSolver::NewtonSolver(Teuchos::RCP<const Thyra::ModelEvaluator<double>> mod
 NewtonSolver::NewtonSolver(Teuchos::RCP<PeridynamicEvaluator> evaluator, const NewtonOptions& options)
     : NewtonSolver(evaluator, Teuchos::rcp(new EvaluatorResidualScale(evaluator)), options) {}
 
+namespace {
+/// Eisenstat-Walker's loosest relative tolerance for a Newton system (NOX's "Forcing Term Initial /
+/// Maximum Tolerance"), also the cap of the forcing floor in NewtonSolver::solve.
+double forcingTermMaximum(const NewtonOptions& options) { return std::max(1e-4, options.linearTolerance); }
+}  // namespace
+
 Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& options) {
   auto params = Teuchos::rcp(new Teuchos::ParameterList("NOX"));
   if (options.lineSearch == "Trust Region") {
@@ -201,9 +207,9 @@ Teuchos::RCP<Teuchos::ParameterList> newtonParameters(const NewtonOptions& optio
     // At most 1e-4: looser solves (NOX's 0.9) cost the strongly nonlinear cantilever 40 % more
     // Newton iterations and changed its adaptive load path; 1e-4 keeps both and still saves
     // about 60 % of the Krylov iterations (docs/performance.md, "The cost of a Newton iteration").
-    newton.set("Forcing Term Initial Tolerance", std::max(1e-4, options.linearTolerance));
+    newton.set("Forcing Term Initial Tolerance", forcingTermMaximum(options));
     newton.set("Forcing Term Minimum Tolerance", options.linearTolerance);
-    newton.set("Forcing Term Maximum Tolerance", std::max(1e-4, options.linearTolerance));
+    newton.set("Forcing Term Maximum Tolerance", forcingTermMaximum(options));
     newton.set("Forcing Term Alpha", 2.0);
     newton.set("Forcing Term Gamma", 0.9);
   } else if (options.forcingTerm == "Constant") {
@@ -347,7 +353,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
       // at least 0.1 tol / r_k, capped at the forcing term's maximum (Kelley's safeguard,
       // "Iterative Methods for Linear and Nonlinear Equations", 6.3; docs/performance.md,
       // session 21).
-      const double cap = std::max(1e-4, options_.linearTolerance);
+      const double cap = forcingTermMaximum(options_);
       group->setForcingFloor([residual = tests.residual, cap] {
         const double r = residual->last();
         if (!(r > 0) || !std::isfinite(r)) return 0.0;

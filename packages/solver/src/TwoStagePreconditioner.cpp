@@ -327,13 +327,8 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       ++stats_.hierarchiesBuilt;
       version_ = aux.version;
       auxMatrix_ = aux.matrix;
-      RCP<const OP> cycle = hierarchy_;
-      if (CoarseEntryCycle::applies(*hierarchy_)) {
-        const bool rebalanced =
-            mp.get<bool>("repartition: rebalance P and R", MueLu::MasterList::getDefault<bool>("repartition: rebalance P and R"));
-        cycle = rcp(new CoarseEntryCycle(hierarchy_, rebalanced));
-        ++stats_.coarseEntryHierarchies;
-      }
+      const RCP<const OP> cycle = auxiliaryCycle(hierarchy_, mp);
+      if (cycle.get() != hierarchy_.get()) ++stats_.coarseEntryHierarchies;
       coarse_ = rcp(new FreeRestriction(cycle, rows, aux.freeToAll));
       dinv_ = Teuchos::null;  // the diagonal scaling of the operator smoother follows the auxiliary matrix
     }
