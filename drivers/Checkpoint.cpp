@@ -188,6 +188,8 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     within("increment", 0.0, 1.0, true);
     within("last_increment", -1.0, 1.0, false);  // negative after a snap-back lowered the load
     within("elapsed_s", 0.0, 1e12, false);
+    if (state.contains("at_limit") && !state.at("at_limit").is_boolean())
+      throw std::runtime_error("'at_limit' = " + state.at("at_limit").dump() + " is not true or false");
     if (state.at("steps").size() != state.at("step").get<std::size_t>())
       throw std::runtime_error("it records " + std::to_string(state.at("steps").size()) + " steps, not 'step' = " +
                                state.at("step").dump());
@@ -382,6 +384,7 @@ void CheckpointWriter::accepted(const StepInfo& s) {
   st["increment"] = state.increment;
   st["last_increment"] = state.lastIncrement;
   st["stall_breaks"] = state.stallBreaks;
+  st["at_limit"] = state.atLimit;
   st["elapsed_s"] = wallSeconds() - t0_ + elapsedBefore_;
   st["segment"] = segment_;
   nlohmann::json steps = nlohmann::json::array();

@@ -387,6 +387,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                            {"coarse_entry_hierarchies", facts.twoStage.coarseEntryHierarchies}};
   if (facts.mumps.setups > 0)
     j["preconditioner"] = {{"type", "MUMPS"}, {"setups", facts.mumps.setups}, {"factorizations", facts.mumps.factorizations},
+                           {"factorizations_during_solves", facts.mumps.factorizationsDuringSolves},
                            {"self_assembled", facts.mumps.selfAssembled},
                            {"factor_precision", facts.mumps.bytesPerEntry == 4 ? "single" : "double"},
                            {"factor_bytes", facts.mumps.factorBytes},

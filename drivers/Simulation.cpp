@@ -219,6 +219,7 @@ std::unique_ptr<PeridynamicDamage> damagePolicy(const Scene& scene, PeridynamicE
   d.maxStallBreaks = scene.maxStallBreaks;
   d.stallBreakTolerance = scene.stallBreakTolerance;
   d.reloadTolerance = scene.reloadTolerance;
+  d.breakAtSnapBackLimit = scene.breakAtSnapBackLimit;
   return std::make_unique<PeridynamicDamage>(evaluator, d);
 }
 
@@ -233,6 +234,7 @@ std::pair<double, int> resumeFrom(const Checkpoint& resume, PeridynamicEvaluator
   ss.increment = st.at("increment");
   ss.lastIncrement = st.at("last_increment");
   ss.stallBreaks = st.at("stall_breaks");
+  ss.atLimit = st.value("at_limit", false);
   std::vector<StepRecord> records;
   for (const auto& sj : st.at("steps")) records.push_back(stepFromJson(sj));
   for (std::size_t k = 0; k < res.probes.size(); ++k)

@@ -77,6 +77,8 @@ perinox_bad_sets(${TINY}
   array_without_braces "'10,5' is not an array like {20, 10}" "Discretization/Particles=10,5")
 perinox_bad_input(mumps_refactor_negative ${GEN}/mumps_refactor_negative.xml "MUMPS: 'Refactor Above Krylov Iterations' must be at least 0")
 perinox_bad_input(mumps_precision_unknown ${GEN}/mumps_precision_unknown.xml "MUMPS/Factor Precision' = 'Half' is not an allowed value")
+perinox_bad_input(mumps_within_solve_not_flexible ${GEN}/mumps_within_solve_not_flexible.xml
+  "it needs Belos 'Block GMRES' with 'Flexible Gmres' = true")
 perinox_bad_input(forcing_term_bogus ${GEN}/forcing_term_bogus.xml "the linear solver preset's 'Forcing Term' must be Constant or Eisenstat-Walker (got 'Bogus')")
 perinox_bad_input(xml_int_overflow ${GEN}/xml_int_overflow.xml "'Solver/Load Steps' = '4294967297' ${INT_RANGE}")
 

@@ -292,3 +292,103 @@ TEST(MumpsPreconditioner, MatrixSingularInSinglePrecisionFallsBackToDouble) {
     EXPECT_NE(std::string(e.what()).find("singular"), std::string::npos) << e.what();
   }
 }
+
+namespace {
+// The preset's form of the kept factors: flexible GMRES to 1e-12 with the MUMPS preconditioner
+// (double-precision factors, renewed above `refactorAbove` applications, during the solve or not).
+Teuchos::RCP<Teuchos::ParameterList> keptFactorsList(int refactorAbove, int withinSolve, bool flexible = true) {
+  auto p = Teuchos::rcp(new Teuchos::ParameterList("Linear Solver"));
+  p->set("Linear Solver Type", "Belos");
+  auto& belos = p->sublist("Linear Solver Types").sublist("Belos");
+  belos.set("Solver Type", "Block GMRES");
+  auto& gmres = belos.sublist("Solver Types").sublist("Block GMRES");
+  gmres.set("Convergence Tolerance", 1e-12);
+  gmres.set("Maximum Iterations", 200);
+  gmres.set("Num Blocks", 200);
+  gmres.set("Flexible Gmres", flexible);
+  p->set("Preconditioner Type", "MUMPS");
+  auto& mumps = p->sublist("Preconditioner Types").sublist("MUMPS");
+  mumps.set("Refactor Above Krylov Iterations", refactorAbove);
+  mumps.set("Refactor Within A Solve Above", withinSolve);
+  return p;
+}
+
+struct KeptSolve {
+  int iterations = 0;
+  double error = 1.0;
+};
+
+// Solves A x = A x_true (first column) with a preconditioner set up on A, through the split
+// solver (Krylov factory and preconditioner factory), as the matrix-free evaluator does.
+KeptSolve keptSolve(const perinox::SplitLinearSolver& split, const Teuchos::RCP<Matrix>& A) {
+  auto op = Thyra::createConstLinearOp<double>(Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>>(A));
+  auto prec = split.preconditioner->createPrec();
+  split.preconditioner->initializePrec(Thyra::defaultLinearOpSource<double>(op), prec.get(), Thyra::SUPPORT_SOLVE_UNSPECIFIED);
+  auto lows = split.krylov->createOp();
+  Thyra::initializePreconditionedOp<double>(*split.krylov, op, prec.getConst(), lows.ptr());
+  auto map = A->getRowMap();
+  auto xTrue = exact(map)->subCopy(Teuchos::tuple<std::size_t>(0));
+  auto b = Teuchos::rcp(new MV(map, 1));
+  A->apply(*xTrue, *b);
+  auto x = Teuchos::rcp(new MV(map, 1));
+  const auto st = Thyra::solve<double>(*lows, Thyra::NOTRANS, *Thyra::createMultiVector<double>(b),
+                                       Thyra::createMultiVector<double>(x).ptr());
+  KeptSolve r;
+  r.iterations = st.extraParameters.is_null() ? -1 : st.extraParameters->get("Iteration Count", -1);
+  x->update(-1.0, *xTrue, 1.0);
+  r.error = x->getVector(0)->normInf() / xTrue->getVector(0)->normInf();
+  return r;
+}
+}  // namespace
+
+// The factors of A (variant 0) kept for a system of other values (variant 1: the diagonal and
+// lower band doubled, far from A). Flexible GMRES with the stale factors needs many iterations;
+// with 'Refactor Within A Solve Above' = 2 the factors are renewed from the new matrix at the third
+// application, and the solve ends within a few more (the new factors are exact, so GMRES
+// converges in about one more iteration). The next set-up keeps the renewed factors (one
+// iteration: 'Refactor Above Krylov Iterations' = 100 does not ask for more). Both reach the
+// solution; the counts show where the factorisations happened.
+TEST(MumpsPreconditioner, StaleFactorsAreRenewedWithinAFlexibleSolve) {
+  auto map = makeMap();
+  auto A0 = makeMatrix(map, 0), A1 = makeMatrix(map, 1);
+  KeptSolve stale, renewed, after;
+  perinox::MumpsPreconditionerStatistics s0, s1;
+  {
+    auto split = perinox::buildSplitLinearSolver(keptFactorsList(100, 0), map->getComm()->getSize());
+    EXPECT_EQ(keptSolve(split, A0).iterations, 1);
+    stale = keptSolve(split, A1);
+    s0 = perinox::mumpsPreconditionerStatistics(*split.preconditioner);
+  }
+  {
+    auto split = perinox::buildSplitLinearSolver(keptFactorsList(100, 2), map->getComm()->getSize());
+    EXPECT_EQ(keptSolve(split, A0).iterations, 1);
+    renewed = keptSolve(split, A1);
+    after = keptSolve(split, A1);
+    s1 = perinox::mumpsPreconditionerStatistics(*split.preconditioner);
+  }
+  EXPECT_LT(stale.error, 1e-9);
+  EXPECT_LT(renewed.error, 1e-9);
+  EXPECT_LT(after.error, 1e-9);
+  EXPECT_GT(stale.iterations, 8);
+  EXPECT_EQ(s0.factorizations, 1);
+  EXPECT_EQ(s0.factorizationsDuringSolves, 0);
+  EXPECT_GE(renewed.iterations, 3);
+  EXPECT_LE(renewed.iterations, 5);
+  EXPECT_EQ(after.iterations, 1);
+  EXPECT_EQ(s1.factorizations, 2);
+  EXPECT_EQ(s1.factorizationsDuringSolves, 1);
+}
+
+// Renewing the factors within a solve needs a flexible Krylov solver: refused otherwise, naming
+// the key and what it needs.
+TEST(MumpsPreconditioner, RefactorDuringASolveNeedsFlexibleGmres) {
+  EXPECT_NO_THROW(perinox::validateLinearSolverList(*keptFactorsList(20, 2), "the test list"));
+  EXPECT_NO_THROW(perinox::validateLinearSolverList(*keptFactorsList(20, 0, false), "the test list"));
+  try {
+    perinox::validateLinearSolverList(*keptFactorsList(20, 2, false), "the test list");
+    ADD_FAILURE() << "accepted a non-flexible GMRES with 'Refactor Within A Solve Above'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("Refactor Within A Solve Above"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Flexible Gmres"), std::string::npos) << e.what();
+  }
+}

@@ -70,6 +70,20 @@ def scenes(tiny):
                                           '        <Parameter name="Factor Precision" type="string" value="Half"/>\n'
                                           '      </ParameterList></ParameterList>\n'
                                           '    </ParameterList>'),
+        # ... renewed within a solve by a Krylov solver that is not flexible.
+        "mumps_within_solve_not_flexible": edited(
+            tiny, '<Parameter name="Linear Solver Preset" type="string" value="direct"/>',
+            '<Parameter name="Linear Solver Preset" type="string" value="custom"/>\n'
+            '    <ParameterList name="Linear Solver">\n'
+            '      <Parameter name="Linear Solver Type" type="string" value="Belos"/>\n'
+            '      <ParameterList name="Linear Solver Types"><ParameterList name="Belos">\n'
+            '        <Parameter name="Solver Type" type="string" value="Block GMRES"/>\n'
+            '      </ParameterList></ParameterList>\n'
+            '      <Parameter name="Preconditioner Type" type="string" value="MUMPS"/>\n'
+            '      <ParameterList name="Preconditioner Types"><ParameterList name="MUMPS">\n'
+            '        <Parameter name="Refactor Within A Solve Above" type="int" value="40"/>\n'
+            '      </ParameterList></ParameterList>\n'
+            '    </ParameterList>'),
     }
     return {k: v if isinstance(v, bytes) else v.encode("utf-8", "surrogateescape") for k, v in out.items()}
 

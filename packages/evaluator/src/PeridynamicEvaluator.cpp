@@ -329,9 +329,13 @@ Teuchos::RCP<Tpetra::MultiVector<double, LO, GO>> PeridynamicEvaluator::rigidBod
 
 Teuchos::RCP<TCrsMatrix> PeridynamicEvaluator::assembledJacobian(const Thyra::VectorBase<double>& x,
                                                                  bool neighbours) const {
+  return assembledJacobianAt(localDisplacements(x), neighbours);
+}
+
+Teuchos::RCP<TCrsMatrix> PeridynamicEvaluator::assembledJacobianAt(const std::vector<double>& u, bool neighbours) const {
   auto A = Teuchos::rcp(new TCrsMatrix(assembler_->graphs(neighbours).owned));
   A->fillComplete();
-  internalForce(x, A.get(), neighbours);
+  assembler_->internalForce(u, A.get(), neighbours, damage_->frozen());
   return A;
 }
 
@@ -405,15 +409,12 @@ void PeridynamicEvaluator::evalModelImpl(const MEB::InArgs<double>& in, const ME
     auto op = Thyra::createConstLinearOp<double, LO, GO, Node>(
         Teuchos::rcp_implicit_cast<const Tpetra::Operator<double, LO, GO, Node>>(precJ_), xSpace_, xSpace_);
     // A preconditioner that needs a matrix now and then (the kept MUMPS factorisation) may ask
-    // for the assembled Jacobian at x during this set-up only.
-    precJ_->setAssembly([this, &x]() -> Teuchos::RCP<const TCrsMatrix> { return assembledJacobian(*x, false); });
-    try {
-      precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
-    } catch (...) {
-      precJ_->setAssembly(nullptr);
-      throw;
-    }
-    precJ_->setAssembly(nullptr);
+    // for the assembled Jacobian at this state during this set-up and the solve that follows
+    // (its displacements are kept, so later evaluations at other states do not change it).
+    precJ_->setAssembly([this, u = localDisplacements(*x)]() -> Teuchos::RCP<const TCrsMatrix> {
+      return assembledJacobianAt(u, false);
+    });
+    precFactory_->initializePrec(Thyra::defaultLinearOpSource<double>(op), Wprec.get());
   } else if (!Wprec.is_null()) {
     // The preconditioner: Ifpack2 or MueLu on the assembled Jacobian or on its part that
     // couples direct neighbours only (memory proportional to the family size).

@@ -425,6 +425,13 @@ void damageSchema(ParameterList& dm) {
             "when a damaged body cannot carry the load it broke at (a snap-back), the highest load it carries is found by reloading "
             "it, to this fraction of that load; the load stepping resumes from there",
             reals(End::Open, 0, 0.5, End::Open));
+  setChoice(dm, "After Snap-Back", "Step Load",
+            {{"Step Load", "the load stepping resumes from the limit load the reload found"},
+             {"Break Most Stretched",
+              "the reload found the damaged body's limit load, to 'Reload Tolerance': break there at once as a stall "
+              "would (On Stall = Break Most Stretched), without first failing the next step's cut-backs down to Min "
+              "Increment"}},
+            "what follows a snap-back (On Stall = Break Most Stretched): ");
 }
 
 void rotationSchema(ParameterList& rot) {
@@ -1400,6 +1407,9 @@ void readDamage(SceneBuild& b) {
   sc.stallBreakTolerance = dm.ranged<double>("Stall Break Tolerance");
   sc.maxStallBreaks = dm.ranged<int>("Max Stall Breaks");
   sc.reloadTolerance = dm.ranged<double>("Reload Tolerance");
+  sc.breakAtSnapBackLimit = dm.get<std::string>("After Snap-Back") == "Break Most Stretched";
+  if (sc.breakAtSnapBackLimit && !sc.stallBreak)
+    fail(b.file, "'Damage/After Snap-Back' = Break Most Stretched needs 'Damage/On Stall' = Break Most Stretched");
 }
 
 /// Blocks: each block's material, G and damage law (ProblemSpec::blocks); on a lattice, the

@@ -487,6 +487,29 @@ void validateLinearSolverList(const Teuchos::ParameterList& stratimikos, const s
   // afresh (about a millisecond) so that no Trilinos object outlives the caller's MPI session.
   const Teuchos::RCP<const Teuchos::ParameterList> valid = validLinearSolverParameters();
   Checker(where).top(stratimikos, *valid);
+  // A MUMPS preconditioner that renews its factors during a solve changes between Krylov
+  // iterations: only flexible GMRES builds its solution from the preconditioned vectors it kept.
+  auto text = [](const Teuchos::ParameterList& l, const std::string& key) {
+    return l.isType<std::string>(key) ? l.get<std::string>(key) : std::string();
+  };
+  if (text(stratimikos, "Preconditioner Type") != "MUMPS" || !stratimikos.isSublist("Preconditioner Types")) return;
+  const auto& types = stratimikos.sublist("Preconditioner Types");
+  if (!types.isSublist("MUMPS")) return;
+  const auto& mumps = types.sublist("MUMPS");
+  if (!mumps.isType<int>("Refactor Within A Solve Above") || mumps.get<int>("Refactor Within A Solve Above") <= 0) return;
+  bool flexible = false;
+  if (text(stratimikos, "Linear Solver Type") == "Belos" && stratimikos.isSublist("Linear Solver Types") &&
+      stratimikos.sublist("Linear Solver Types").isSublist("Belos")) {
+    const auto& belos = stratimikos.sublist("Linear Solver Types").sublist("Belos");
+    const std::string type = text(belos, "Solver Type");
+    if (type == "Block GMRES" && belos.isSublist("Solver Types") && belos.sublist("Solver Types").isSublist(type)) {
+      const auto& gmres = belos.sublist("Solver Types").sublist(type);
+      flexible = gmres.isType<bool>("Flexible Gmres") && gmres.get<bool>("Flexible Gmres");
+    }
+  }
+  if (!flexible)
+    Checker(where).fail("'Preconditioner Types/MUMPS/Refactor Within A Solve Above' > 0 changes the preconditioner within a "
+                        "solve; it needs Belos 'Block GMRES' with 'Flexible Gmres' = true");
 }
 
 const std::vector<std::pair<std::string, std::vector<std::string>>>& presetOwnKeys() {

@@ -318,43 +318,96 @@ class MumpsLinearOpWithSolve : public Thyra::LinearOpWithSolveBase<double> {
   std::shared_ptr<MumpsContext> context_;
 };
 
-/// How the kept factors were used: applications since the last set-up and in all, and the time
-/// their solves took.
-struct FactorsUsage {
-  long long sinceSetup = 0, total = 0;
-  double solveSeconds = 0;
-};
-
 double seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
-/// The kept factors as a Tpetra operator, y = alpha (LU)^-1 x + beta y, counting its applications.
+/// The kept factors of a MUMPS preconditioner, what it is configured to do with them, how they
+/// were used, and the matrix of the current set-up (assembled when asked) for a factorisation
+/// during a solve. Shared by the factory and the operators its set-ups hand out.
+struct KeptFactors {
+  // The factors in use: those of the configured precision (primary), or of the double-precision
+  // fallback when the primary's factorisation failed.
+  std::shared_ptr<MumpsContext> context, primary, fallback;
+  int ordering = 7, memoryRelaxation = 30, refactorAbove = 20, withinSolveAbove = 0;
+  bool singlePrecision = false;
+  // Applications since the last set-up, and since the last factorisation within this set-up.
+  long long sinceSetup = 0, sinceFactor = 0;
+  // Whether this set-up factorised (at the set-up or during its solve): fresh factors are not
+  // renewed again before the next set-up.
+  bool factoredThisSetup = false;
+  std::function<Teuchos::RCP<const Matrix>()> matrix;
+  MumpsPreconditionerStatistics stats;
+
+  // Factorises A, in the configured precision or, when that fails in single precision, in double.
+  void factor(const Matrix& A) {
+    auto make = [&](bool single) -> std::shared_ptr<MumpsContext> {
+      if (single) return std::make_shared<MumpsContextT<SinglePrecision>>(A.getComm(), ordering, memoryRelaxation);
+      return std::make_shared<MumpsContextT<DoublePrecision>>(A.getComm(), ordering, memoryRelaxation);
+    };
+    const double t0 = seconds();
+    if (!primary) primary = make(singlePrecision);
+    try {
+      primary->factor(A);
+      context = primary;
+    } catch (const std::runtime_error&) {
+      // A matrix that is singular in single precision only (a pivot lost to its rounding, near a
+      // limit point) is factorised in double precision this time; an error there is the caller's.
+      // Every rank throws together (MUMPS's INFOG is global), so every rank falls back.
+      if (!singlePrecision) throw;
+      if (!fallback) fallback = make(false);
+      fallback->factor(A);
+      context = fallback;
+      ++stats.doublePrecisionFallbacks;
+    }
+    stats.factorSeconds += seconds() - t0;
+    ++stats.factorizations;
+    stats.factorBytes = std::max(stats.factorBytes, context->factorEntries() * context->bytesPerEntry());
+    stats.bytesPerEntry = context->bytesPerEntry();
+    sinceFactor = 0;
+    factoredThisSetup = true;
+  }
+
+  // y = (LU)^-1 x. Stale factors that have already been applied 'Refactor Within A Solve Above'
+  // times in this solve are first renewed from the set-up's matrix (collective: every rank counts
+  // the same applications of a global Krylov solver).
+  void solve(bool transpose, const MV& X, MV& Y) {
+    if (withinSolveAbove > 0 && !factoredThisSetup && sinceFactor >= withinSolveAbove && matrix) {
+      const auto A = matrix();
+      if (A.is_null())
+        throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself during a solve");
+      factor(*A);
+      ++stats.factorizationsDuringSolves;
+    }
+    ++sinceSetup;
+    ++sinceFactor;
+    ++stats.solves;
+    const double t0 = seconds();
+    context->solve(transpose, X, Y);
+    stats.solveSeconds += seconds() - t0;
+  }
+};
+
+/// The kept factors as a Tpetra operator, y = alpha (LU)^-1 x + beta y.
 class MumpsFactorsOperator final : public Tpetra::Operator<double, int, long long, Node> {
  public:
-  MumpsFactorsOperator(std::shared_ptr<MumpsContext> context, Teuchos::RCP<const Map> map,
-                       std::shared_ptr<FactorsUsage> usage)
-      : context_(std::move(context)), map_(std::move(map)), usage_(std::move(usage)) {}
+  MumpsFactorsOperator(std::shared_ptr<KeptFactors> kept, Teuchos::RCP<const Map> map)
+      : kept_(std::move(kept)), map_(std::move(map)) {}
   Teuchos::RCP<const Map> getDomainMap() const override { return map_; }
   Teuchos::RCP<const Map> getRangeMap() const override { return map_; }
   bool hasTransposeApply() const override { return true; }
   void apply(const MV& X, MV& Y, Teuchos::ETransp mode, double alpha, double beta) const override {
-    ++usage_->sinceSetup;
-    ++usage_->total;
-    const double t0 = seconds();
     const bool transpose = mode != Teuchos::NO_TRANS;
     if (alpha == 1.0 && beta == 0.0) {
-      context_->solve(transpose, X, Y);
+      kept_->solve(transpose, X, Y);
     } else {
       MV z(map_, X.getNumVectors());
-      context_->solve(transpose, X, z);
+      kept_->solve(transpose, X, z);
       Y.update(alpha, z, beta);
     }
-    usage_->solveSeconds += seconds() - t0;
   }
 
  private:
-  std::shared_ptr<MumpsContext> context_;
+  std::shared_ptr<KeptFactors> kept_;
   Teuchos::RCP<const Map> map_;
-  std::shared_ptr<FactorsUsage> usage_;
 };
 
 Teuchos::RCP<const Matrix> crsMatrix(const Thyra::LinearOpSourceBase<double>& src) {
@@ -368,6 +421,7 @@ const char* const kOrdering = "Ordering";
 const char* const kRelaxation = "Memory Relaxation Percent";
 const char* const kRefactor = "Refactor Above Krylov Iterations";
 const char* const kPrecision = "Factor Precision";
+const char* const kWithinSolve = "Refactor Within A Solve Above";
 }  // namespace
 
 MumpsLinearOpWithSolveFactory::MumpsLinearOpWithSolveFactory() = default;
@@ -448,12 +502,7 @@ std::string MumpsLinearOpWithSolveFactory::description() const { return "perinox
 
 // --- the kept factorisation as a preconditioner ---
 
-struct MumpsPreconditionerFactory::State {
-  // The factors in use: those of the configured precision (primary), or of the double-precision
-  // fallback when the primary's factorisation failed.
-  std::shared_ptr<MumpsContext> context, primary, fallback;
-  std::shared_ptr<FactorsUsage> usage = std::make_shared<FactorsUsage>();
-};
+struct MumpsPreconditionerFactory::State : KeptFactors {};
 
 MumpsPreconditionerFactory::MumpsPreconditionerFactory() : state_(std::make_shared<State>()) {}
 MumpsPreconditionerFactory::~MumpsPreconditionerFactory() = default;
@@ -493,48 +542,34 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
     throw std::invalid_argument(
         "the MUMPS preconditioner needs an assembled matrix: the assembled Jacobian, or with Solver/Jacobian = "
         "Matrix-Free a 'Preconditioner Matrix' of Assembled, Neighbours or None (the Jacobian assembled when refactorised)");
-  ++stats_.setups;
   State& st = *state_;
+  ++st.stats.setups;
   const Teuchos::RCP<const Map> rows = op->getRangeMap();
+  // The matrix of this set-up, for a factorisation now or during the solve that follows.
+  if (!A.is_null()) {
+    st.matrix = [A] { return A; };
+  } else {
+    st.matrix = [op, lazy, &st]() -> Teuchos::RCP<const Matrix> {
+      auto assembled = lazy->assembled();
+      if (!assembled.is_null()) ++st.stats.selfAssembled;
+      return assembled;
+    };
+  }
+  st.factoredThisSetup = false;
   // Refactorise when there are no factors, the rows moved, or the last solve needed more than
   // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
   // Krylov solver's iterations are global).
   const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
-                        !st.context->rowMap()->isSameAs(*rows) || st.usage->sinceSetup > refactorAbove_;
+                        !st.context->rowMap()->isSameAs(*rows) || st.sinceFactor > refactorAbove_;
   if (refactor) {
-    if (A.is_null()) {
-      A = lazy->assembled();
-      if (A.is_null())
-        throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself (outside a set-up)");
-      ++stats_.selfAssembled;
-    }
-    auto make = [&](bool single) -> std::shared_ptr<MumpsContext> {
-      if (single) return std::make_shared<MumpsContextT<SinglePrecision>>(A->getComm(), ordering_, memoryRelaxation_);
-      return std::make_shared<MumpsContextT<DoublePrecision>>(A->getComm(), ordering_, memoryRelaxation_);
-    };
-    const double t0 = seconds();
-    if (!st.primary) st.primary = make(singlePrecision_);
-    try {
-      st.primary->factor(*A);
-      st.context = st.primary;
-    } catch (const std::runtime_error&) {
-      // A matrix that is singular in single precision (a pivot lost to its rounding, near a limit
-      // point) is factorised in double precision this time; an error there is the caller's.
-      // Every rank throws together (MUMPS's INFOG is global), so every rank falls back.
-      if (!singlePrecision_) throw;
-      if (!st.fallback) st.fallback = make(false);
-      st.fallback->factor(*A);
-      st.context = st.fallback;
-      ++stats_.doublePrecisionFallbacks;
-    }
-    stats_.factorSeconds += seconds() - t0;
-    ++stats_.factorizations;
-    stats_.factorBytes = std::max(stats_.factorBytes, st.context->factorEntries() * st.context->bytesPerEntry());
-    stats_.bytesPerEntry = st.context->bytesPerEntry();
+    const auto matrix = st.matrix();
+    if (matrix.is_null())
+      throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself (outside a set-up)");
+    st.factor(*matrix);
   }
-  st.usage->sinceSetup = 0;
-  Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M =
-      Teuchos::rcp(new MumpsFactorsOperator(st.context, rows, st.usage));
+  st.sinceSetup = 0;
+  st.sinceFactor = 0;
+  Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M = Teuchos::rcp(new MumpsFactorsOperator(state_, rows));
   auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(rows);
   Teuchos::RCP<const Thyra::LinearOpBase<double>> thyraM = Thyra::constTpetraLinearOp<double, int, long long, Node>(
       space, space, M);
@@ -560,8 +595,15 @@ void MumpsPreconditionerFactory::setParameterList(const Teuchos::RCP<Teuchos::Pa
   memoryRelaxation_ = params_->get<int>(kRelaxation);
   refactorAbove_ = params_->get<int>(kRefactor);
   singlePrecision_ = params_->get<std::string>(kPrecision) == "Single";
+  refactorWithinSolve_ = params_->get<int>(kWithinSolve);
   if (memoryRelaxation_ < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
   if (refactorAbove_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
+  if (refactorWithinSolve_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Within A Solve Above' must be at least 0");
+  state_->ordering = ordering_;
+  state_->memoryRelaxation = memoryRelaxation_;
+  state_->refactorAbove = refactorAbove_;
+  state_->singlePrecision = singlePrecision_;
+  state_->withinSolveAbove = refactorWithinSolve_;
 }
 
 Teuchos::RCP<Teuchos::ParameterList> MumpsPreconditionerFactory::getNonconstParameterList() { return params_; }
@@ -586,6 +628,10 @@ Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getValidP
                "precision of the kept factors: Double, or Single (MUMPS's single-precision interface: half the bytes, "
                "and solves that read half as much; the Krylov solver still converges in double precision)",
                Teuchos::rcp(new Teuchos::StringValidator(Teuchos::tuple<std::string>("Double", "Single"))));
+    valid->set(kWithinSolve, 0,
+               "renew stale factors within a solve once they have been applied this many times in it (once a set-up; 0: "
+               "never); only for a flexible Krylov solver (Belos Block GMRES with 'Flexible Gmres' = true), which allows "
+               "the preconditioner to change between iterations");
   }
   return valid;
 }
@@ -593,10 +639,7 @@ Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getValidP
 std::string MumpsPreconditionerFactory::description() const { return "perinox::MumpsPreconditionerFactory"; }
 
 MumpsPreconditionerStatistics MumpsPreconditionerFactory::statistics() const {
-  MumpsPreconditionerStatistics s = stats_;
-  s.solves = state_->usage->total;
-  s.solveSeconds = state_->usage->solveSeconds;
-  return s;
+  return state_->stats;
 }
 
 MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::PreconditionerFactoryBase<double>& factory) {

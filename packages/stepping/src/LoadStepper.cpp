@@ -265,6 +265,7 @@ NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& l
     s << "    the damaged body cannot carry load factor " << lam << " (snap-back): equilibrium at " << bestMu * lam;
     note(s.str());
     lam *= bestMu;
+    state_.atLimit = true;
   }
   setLoadFactor(lam);
   bestR.iterations = iters;
@@ -301,10 +302,21 @@ bool LoadStepper::run() {
     if (options_.predictor && options_.tangentPredictor && state_.lastIncrement == 0 && state_.step == 1)
       firstTangent = firstStepTangent();
     int cut = 0;
-    NewtonResult nr = solveWithCutbacks(*x, rec, cut, firstTangent.get());
-    if (!nr.converged && damage_ && damage_->breakOnStalls) {
+    NewtonResult nr;
+    const bool atLimit = state_.atLimit;
+    state_.atLimit = false;
+    if (atLimit && damage_ && damage_->breakOnStalls && damage_->breakAtSnapBackLimit) {
+      // The body is at its limit load: any larger load fails (the next step's cut-backs would find
+      // that down to Min Increment first), so break at once.
+      nr.failure = "at the damaged body's limit load (the snap-back's reload found it)";
       breakAtStall(*x, rec, nr, stepIncrement);
-      if (!nr.converged && rec.stallBrokenBonds == 0 && rec.detached.empty()) retryWithoutPredictor(*x, rec, nr, cut, stepIncrement);
+    }
+    if (!rec.stallBrokenBonds && rec.detached.empty()) {
+      nr = solveWithCutbacks(*x, rec, cut, firstTangent.get());
+      if (!nr.converged && damage_ && damage_->breakOnStalls) {
+        breakAtStall(*x, rec, nr, stepIncrement);
+        if (!nr.converged && rec.stallBrokenBonds == 0 && rec.detached.empty()) retryWithoutPredictor(*x, rec, nr, cut, stepIncrement);
+      }
     }
     rec.cutbacks = cut;
     rec.loadFactor = nr.converged ? state_.loadFactor : std::min(1.0, state_.loadFactor + state_.increment);

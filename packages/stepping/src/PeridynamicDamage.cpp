@@ -29,6 +29,7 @@ PeridynamicDamage::PeridynamicDamage(PeridynamicEvaluator& evaluator, const Peri
   breakOnStalls = o.breakOnStalls;
   maxStallBreaks = o.maxStallBreaks;
   reloadTolerance = o.reloadTolerance;
+  breakAtSnapBackLimit = o.breakAtSnapBackLimit;
 }
 
 DamagePolicy::Breaks PeridynamicDamage::breakAfterStep(const Thyra::VectorBase<double>& x) {

@@ -174,6 +174,8 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   void residualFrom(const TVector& fint, const Thyra::VectorBase<double>& x, Thyra::VectorBase<double>& f) const;
   /// Local displacements (local particles * dim) for the state x at the current load factor.
   std::vector<double> localDisplacements(const Thyra::VectorBase<double>& x) const;
+  /// The Jacobian assembled at local displacements (owned and ghost particles, as localDisplacements).
+  Teuchos::RCP<TCrsMatrix> assembledJacobianAt(const std::vector<double>& u, bool neighbours) const;
   /// Owned-all internal force vector (owned particles * dim) at x (with W: the Jacobian too).
   Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W,
                                       bool neighbours = false) const;

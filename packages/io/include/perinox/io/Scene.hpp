@@ -107,6 +107,7 @@ struct Scene {
   double stallBreakTolerance = 1e-6;              // damage: stretch window of that break, relative to s_cr - s_min
   int maxStallBreaks = 200;                       // damage: stall breaks allowed in a run
   double reloadTolerance = 0.01;                  // damage: a snap-back's load found to this fraction
+  bool breakAtSnapBackLimit = false;              // damage: 'After Snap-Back' = Break Most Stretched
   Teuchos::RCP<Teuchos::ParameterList> resolved;  // the scene with every default filled in
 };
 

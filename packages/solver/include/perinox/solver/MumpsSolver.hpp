@@ -63,6 +63,8 @@ struct MumpsPreconditionerStatistics {
   /// Single-precision factorisations that failed (singular at that precision) and were redone in
   /// double precision.
   long long doublePrecisionFallbacks = 0;
+  /// Factorisations made within a solve ('Refactor Within A Solve Above'), counted in factorizations too.
+  long long factorizationsDuringSolves = 0;
 };
 
 /// MUMPS's LU of the preconditioner matrix as a preconditioner ("Preconditioner Type" = "MUMPS"),
@@ -71,7 +73,11 @@ struct MumpsPreconditionerStatistics {
 /// only when the solve since the previous set-up took more than 'Refactor Above Krylov Iterations'
 /// applications, or the rows changed. Near a damaged state a factorisation costs about a hundred
 /// residual evaluations and a solve with stale factors a few GMRES iterations
-/// (docs/performance.md, "A kept factorisation").
+/// (docs/performance.md, "A kept factorisation"). With 'Refactor Within A Solve Above' = k > 0
+/// (for a flexible Krylov solver only, which allows the preconditioner to change between
+/// iterations) the factors are also renewed within a solve that has applied stale ones k times,
+/// once per set-up: the solve goes on with the current Jacobian's factors instead of running to
+/// its iteration limit with the old ones.
 class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<double> {
  public:
   MumpsPreconditionerFactory();
@@ -98,9 +104,11 @@ class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<doubl
   struct State;
   Teuchos::RCP<Teuchos::ParameterList> params_;
   int ordering_ = 7, memoryRelaxation_ = 30, refactorAbove_ = 20;
-  bool singlePrecision_ = false;  // 'Factor Precision' = Single
-  std::shared_ptr<State> state_;  // the factors, the layout they belong to, the applications since the last set-up
-  mutable MumpsPreconditionerStatistics stats_;
+  bool singlePrecision_ = false;     // 'Factor Precision' = Single
+  int refactorWithinSolve_ = 0;       // 'Refactor Within A Solve Above'
+  // The factors, the layout they belong to, their applications, the statistics; shared with the
+  // operator a set-up hands out, which may refactorise during a solve.
+  std::shared_ptr<State> state_;
   mutable Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> src_;
 };
 

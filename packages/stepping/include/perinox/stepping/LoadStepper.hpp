@@ -124,6 +124,9 @@ class DamagePolicy {
   bool breakOnStalls = false;     // call breakOnStall when a step fails for good
   int maxStallBreaks = 200;
   double reloadTolerance = 0.01;  // a snap-back's limit load is found to this fraction
+  // At a snap-back's limit load (found by the reload): break there at once, as a stall break would
+  // after the cut-backs of the next step had failed (needs breakOnStalls), instead of stepping on.
+  bool breakAtSnapBackLimit = false;
 };
 
 /// A step as observers see it.
@@ -167,6 +170,9 @@ struct StepperState {
   double increment = 0.0;        // the next increment
   double lastIncrement = 0.0;    // of the last accepted step (the predictor's)
   int stallBreaks = 0;
+  // The last re-equilibration found the damaged body's limit load (a snap-back): the state is at
+  // that limit, to the damage policy's reload tolerance.
+  bool atLimit = false;
 };
 
 class LoadStepper {

@@ -16,6 +16,7 @@ struct PeridynamicDamageOptions {
   int maxStallBreaks = 200;
   double stallBreakTolerance = 1e-6; // bonds within this fraction of (s_cr - s_min) of the largest break together
   double reloadTolerance = 0.01;     // a snap-back's limit load found to this fraction
+  bool breakAtSnapBackLimit = false; // 'Damage/After Snap-Back' = Break Most Stretched (needs breakOnStalls)
 };
 
 class PeridynamicDamage final : public DamagePolicy {
