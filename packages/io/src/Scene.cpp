@@ -429,9 +429,8 @@ void damageSchema(ParameterList& dm) {
             {{"Step Load", "the load stepping resumes from the limit load the reload found"},
              {"Break Most Stretched",
               "the reload found the damaged body's limit load, to 'Reload Tolerance': break there at once as a stall "
-              "would (On Stall = Break Most Stretched), without first failing the next step's cut-backs down to Min "
-              "Increment"}},
-            "what follows a snap-back (On Stall = Break Most Stretched): ");
+              "would, without first failing the next step's cut-backs down to Min Increment"}},
+            "what follows a snap-back (with On Stall = Break Most Stretched; ignored with Stop): ");
 }
 
 void rotationSchema(ParameterList& rot) {
@@ -1407,9 +1406,8 @@ void readDamage(SceneBuild& b) {
   sc.stallBreakTolerance = dm.ranged<double>("Stall Break Tolerance");
   sc.maxStallBreaks = dm.ranged<int>("Max Stall Breaks");
   sc.reloadTolerance = dm.ranged<double>("Reload Tolerance");
-  sc.breakAtSnapBackLimit = dm.get<std::string>("After Snap-Back") == "Break Most Stretched";
-  if (sc.breakAtSnapBackLimit && !sc.stallBreak)
-    fail(b.file, "'Damage/After Snap-Back' = Break Most Stretched needs 'Damage/On Stall' = Break Most Stretched");
+  // A break at the limit is a stall break: with On Stall = Stop there is none.
+  sc.breakAtSnapBackLimit = sc.stallBreak && dm.get<std::string>("After Snap-Back") == "Break Most Stretched";
 }
 
 /// Blocks: each block's material, G and damage law (ProblemSpec::blocks); on a lattice, the
