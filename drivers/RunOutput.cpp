@@ -275,6 +275,7 @@ nlohmann::json stepJson(const StepRecord& s, bool damage, bool arcLength) {
     j["reload_steps"] = s.reloadSteps;
     j["fragment_particles"] = s.fragmentParticles;
     if (s.stallBrokenBonds > 0) j["stall_max_stretch"] = s.stallStretch;
+    if (s.stallAtLimit) j["stall_at_limit"] = true;
   }
   return j;
 }
@@ -314,6 +315,7 @@ StepRecord stepFromJson(const nlohmann::json& j) {
   s.reloadSteps = j.value("reload_steps", 0);
   s.fragmentParticles = j.value("fragment_particles", 0LL);
   s.stallStretch = j.value("stall_max_stretch", 0.0);
+  s.stallAtLimit = j.value("stall_at_limit", false);
   return s;
 }
 

@@ -129,6 +129,9 @@ def main():
     ap.add_argument("--min-broken", type=int, default=1)
     ap.add_argument("--stretch-far-ratio", type=float, default=None)
     ap.add_argument("--max-stretch", type=float, default=None)
+    ap.add_argument("--limit-breaks", type=int, default=None,
+                    help="at least this many stall breaks made at a snap-back's limit (Damage/After Snap-Back = "
+                         "Break Most Stretched); 0: none at all")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     rows, s, ux = load(a.dirs[0])
@@ -136,6 +139,13 @@ def main():
         fail("run did not converge: " + s.get("failure", ""))
     if s.get("broken_bonds_total", 0) < a.min_broken:
         fail(f"only {s.get('broken_bonds_total', 0)} bonds broken")
+    if a.limit_breaks is not None:
+        at_limit = sum(1 for st in s["steps"] if st.get("stall_at_limit", False))
+        print(f"{at_limit} stall break(s) at a snap-back's limit")
+        if a.limit_breaks == 0 and at_limit > 0:
+            fail(f"{at_limit} stall break(s) at a snap-back's limit, none expected")
+        if at_limit < a.limit_breaks:
+            fail(f"only {at_limit} stall break(s) at a snap-back's limit, at least {a.limit_breaks} expected")
     damaged = [(x, y, phi) for (x, y, phi, fic) in rows.values() if phi > 0 and not fic]
     print(f"{s.get('broken_bonds_total', 0)} bonds broken, {len(damaged)} damaged particles")
     if a.stretch_far_ratio is not None or a.max_stretch is not None:

@@ -310,6 +310,7 @@ bool LoadStepper::run() {
       // that down to Min Increment first), so break at once.
       nr.failure = "at the damaged body's limit load (the snap-back's reload found it)";
       breakAtStall(*x, rec, nr, stepIncrement);
+      rec.stallAtLimit = rec.stallBrokenBonds > 0 || !rec.detached.empty();
     }
     if (!rec.stallBrokenBonds && rec.detached.empty()) {
       nr = solveWithCutbacks(*x, rec, cut, firstTangent.get());

@@ -43,6 +43,7 @@ struct StepRecord {
   long long stallBrokenBonds = 0;  // damage, stall break: bonds broken because the step could not
                                    // be converged (included in brokenBonds)
   double stallStretch = 0;         // the largest stretch at that break
+  bool stallAtLimit = false;       // that break was made at a snap-back's limit load, without a failed step
   int reloadSteps = 0;             // damage: sub-steps of reloading the damaged body when Newton could
                                    // not re-equilibrate directly after a break
   double arcLength = 0;            // arc-length continuation: the arc of this step
