@@ -327,10 +327,12 @@ struct KeptFactors {
   // The factors in use: those of the configured precision (primary), or of the double-precision
   // fallback when the primary's factorisation failed.
   std::shared_ptr<MumpsContext> context, primary, fallback;
+  // The configuration ('Ordering', 'Memory Relaxation Percent', 'Refactor Above Krylov
+  // Iterations', 'Refactor Within A Solve Above', 'Factor Precision' = Single).
   int ordering = 7, memoryRelaxation = 30, refactorAbove = 20, withinSolveAbove = 0;
   bool singlePrecision = false;
-  // Applications since the last set-up, and since the last factorisation within this set-up.
-  long long sinceSetup = 0, sinceFactor = 0;
+  // Applications since the last factorisation within this set-up.
+  long long sinceFactor = 0;
   // Whether this set-up factorised (at the set-up or during its solve): fresh factors are not
   // renewed again before the next set-up.
   bool factoredThisSetup = false;
@@ -377,7 +379,6 @@ struct KeptFactors {
       factor(*A);
       ++stats.factorizationsDuringSolves;
     }
-    ++sinceSetup;
     ++sinceFactor;
     ++stats.solves;
     const double t0 = seconds();
@@ -560,14 +561,13 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
   // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
   // Krylov solver's iterations are global).
   const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
-                        !st.context->rowMap()->isSameAs(*rows) || st.sinceFactor > refactorAbove_;
+                        !st.context->rowMap()->isSameAs(*rows) || st.sinceFactor > st.refactorAbove;
   if (refactor) {
     const auto matrix = st.matrix();
     if (matrix.is_null())
-      throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself (outside a set-up)");
+      throw std::logic_error("the MUMPS preconditioner's operator could not assemble itself at its set-up");
     st.factor(*matrix);
   }
-  st.sinceSetup = 0;
   st.sinceFactor = 0;
   Teuchos::RCP<const Tpetra::Operator<double, int, long long, Node>> M = Teuchos::rcp(new MumpsFactorsOperator(state_, rows));
   auto space = Thyra::tpetraVectorSpace<double, int, long long, Node>(rows);
@@ -591,19 +591,15 @@ void MumpsPreconditionerFactory::setParameterList(const Teuchos::RCP<Teuchos::Pa
   TEUCHOS_TEST_FOR_EXCEPT(params.is_null());
   params->validateParametersAndSetDefaults(*getValidParameters());
   params_ = params;
-  ordering_ = Teuchos::getIntegralValue<int>(*params_, kOrdering);
-  memoryRelaxation_ = params_->get<int>(kRelaxation);
-  refactorAbove_ = params_->get<int>(kRefactor);
-  singlePrecision_ = params_->get<std::string>(kPrecision) == "Single";
-  refactorWithinSolve_ = params_->get<int>(kWithinSolve);
-  if (memoryRelaxation_ < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
-  if (refactorAbove_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
-  if (refactorWithinSolve_ < 0) throw std::invalid_argument("MUMPS: 'Refactor Within A Solve Above' must be at least 0");
-  state_->ordering = ordering_;
-  state_->memoryRelaxation = memoryRelaxation_;
-  state_->refactorAbove = refactorAbove_;
-  state_->singlePrecision = singlePrecision_;
-  state_->withinSolveAbove = refactorWithinSolve_;
+  State& st = *state_;
+  st.ordering = Teuchos::getIntegralValue<int>(*params_, kOrdering);
+  st.memoryRelaxation = params_->get<int>(kRelaxation);
+  st.refactorAbove = params_->get<int>(kRefactor);
+  st.singlePrecision = params_->get<std::string>(kPrecision) == "Single";
+  st.withinSolveAbove = params_->get<int>(kWithinSolve);
+  if (st.memoryRelaxation < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
+  if (st.refactorAbove < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
+  if (st.withinSolveAbove < 0) throw std::invalid_argument("MUMPS: 'Refactor Within A Solve Above' must be at least 0");
 }
 
 Teuchos::RCP<Teuchos::ParameterList> MumpsPreconditionerFactory::getNonconstParameterList() { return params_; }

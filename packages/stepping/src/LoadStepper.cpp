@@ -23,6 +23,9 @@ double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+/// Whether the step's stall break broke something (bonds, or detached particles).
+bool stallBroke(const StepRecord& rec) { return rec.stallBrokenBonds > 0 || !rec.detached.empty(); }
+
 std::string shown(double v) {
   std::ostringstream s;
   s << v;
@@ -310,13 +313,13 @@ bool LoadStepper::run() {
       // that down to Min Increment first), so break at once.
       nr.failure = "at the damaged body's limit load (the snap-back's reload found it)";
       breakAtStall(*x, rec, nr, stepIncrement);
-      rec.stallAtLimit = rec.stallBrokenBonds > 0 || !rec.detached.empty();
+      rec.stallAtLimit = stallBroke(rec);
     }
-    if (!rec.stallBrokenBonds && rec.detached.empty()) {
+    if (!rec.stallAtLimit) {
       nr = solveWithCutbacks(*x, rec, cut, firstTangent.get());
       if (!nr.converged && damage_ && damage_->breakOnStalls) {
         breakAtStall(*x, rec, nr, stepIncrement);
-        if (!nr.converged && rec.stallBrokenBonds == 0 && rec.detached.empty()) retryWithoutPredictor(*x, rec, nr, cut, stepIncrement);
+        if (!nr.converged && !stallBroke(rec)) retryWithoutPredictor(*x, rec, nr, cut, stepIncrement);
       }
     }
     rec.cutbacks = cut;

@@ -103,11 +103,8 @@ class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<doubl
  private:
   struct State;
   Teuchos::RCP<Teuchos::ParameterList> params_;
-  int ordering_ = 7, memoryRelaxation_ = 30, refactorAbove_ = 20;
-  bool singlePrecision_ = false;     // 'Factor Precision' = Single
-  int refactorWithinSolve_ = 0;       // 'Refactor Within A Solve Above'
-  // The factors, the layout they belong to, their applications, the statistics; shared with the
-  // operator a set-up hands out, which may refactorise during a solve.
+  // The configuration, the factors, the layout they belong to, their applications, the
+  // statistics; shared with the operator a set-up hands out, which may refactorise during a solve.
   std::shared_ptr<State> state_;
   mutable Teuchos::RCP<const Thyra::LinearOpSourceBase<double>> src_;
 };
