@@ -76,6 +76,7 @@ perinox_bad_sets(${TINY}
   int_particles_fraction "entry 1, '20.7', is not an integer" "Discretization/Particles={20.7,10}"
   array_without_braces "'10,5' is not an array like {20, 10}" "Discretization/Particles=10,5")
 perinox_bad_input(mumps_refactor_negative ${GEN}/mumps_refactor_negative.xml "MUMPS: 'Refactor Above Krylov Iterations' must be at least 0")
+perinox_bad_input(mumps_excess_negative ${GEN}/mumps_excess_negative.xml "MUMPS: 'Refactor Above Excess Applications' must be at least 0")
 perinox_bad_input(mumps_precision_unknown ${GEN}/mumps_precision_unknown.xml "MUMPS/Factor Precision' = 'Half' is not an allowed value")
 perinox_bad_input(mumps_within_solve_not_flexible ${GEN}/mumps_within_solve_not_flexible.xml
   "it needs Belos 'Block GMRES' with 'Flexible Gmres' = true")

@@ -296,7 +296,8 @@ TEST(MumpsPreconditioner, MatrixSingularInSinglePrecisionFallsBackToDouble) {
 namespace {
 // The preset's form of the kept factors: flexible GMRES to 1e-12 with the MUMPS preconditioner
 // (double-precision factors, renewed above `refactorAbove` applications, during the solve or not).
-Teuchos::RCP<Teuchos::ParameterList> keptFactorsList(int refactorAbove, int withinSolve, bool flexible = true) {
+Teuchos::RCP<Teuchos::ParameterList> keptFactorsList(int refactorAbove, int withinSolve, bool flexible = true,
+                                                    int excessAbove = 0) {
   auto p = Teuchos::rcp(new Teuchos::ParameterList("Linear Solver"));
   p->set("Linear Solver Type", "Belos");
   auto& belos = p->sublist("Linear Solver Types").sublist("Belos");
@@ -310,6 +311,7 @@ Teuchos::RCP<Teuchos::ParameterList> keptFactorsList(int refactorAbove, int with
   auto& mumps = p->sublist("Preconditioner Types").sublist("MUMPS");
   mumps.set("Refactor Above Krylov Iterations", refactorAbove);
   mumps.set("Refactor Within A Solve Above", withinSolve);
+  mumps.set("Refactor Above Excess Applications", excessAbove);
   return p;
 }
 
@@ -391,4 +393,50 @@ TEST(MumpsPreconditioner, RefactorDuringASolveNeedsFlexibleGmres) {
     EXPECT_NE(std::string(e.what()).find("Refactor Within A Solve Above"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("Flexible Gmres"), std::string::npos) << e.what();
   }
+}
+
+// Stale factors that each solve needs S applications of (S > 8, measured first; fresh ones need
+// one) are kept by the per-solve rule ('Refactor Above Krylov Iterations' = 100) for ever. With
+// 'Refactor Above Excess Applications' = E between the excess of one stale solve (S - 2) and that
+// of two, they are renewed at the set-up after the second stale solve: the third solve needs one
+// iteration. E = 0 keeps them. Counts only (iterations, factorisations): no timing.
+TEST(MumpsPreconditioner, StaleFactorsAreRenewedOnceTheirExcessApplicationsAddUp) {
+  auto map = makeMap();
+  auto A0 = makeMatrix(map, 0), A1 = makeMatrix(map, 1);
+  const int comm = map->getComm()->getSize();
+  std::vector<int> kept, renewed;
+  perinox::MumpsPreconditionerStatistics sKept, sRenewed;
+  {
+    auto split = perinox::buildSplitLinearSolver(keptFactorsList(100, 0), comm);
+    for (const auto& A : {A0, A1, A1, A1}) {
+      const KeptSolve r = keptSolve(split, A);
+      EXPECT_LT(r.error, 1e-9);
+      kept.push_back(r.iterations);
+    }
+    sKept = perinox::mumpsPreconditionerStatistics(*split.preconditioner);
+  }
+  const int S = kept[1];
+  ASSERT_GT(S, 8);
+  EXPECT_EQ(kept[0], 1);
+  EXPECT_EQ(kept[2], S);
+  EXPECT_EQ(kept[3], S);
+  EXPECT_EQ(sKept.factorizations, 1);
+  const int E = (3 * (S - 2)) / 2;  // more than one stale solve's excess, less than two
+  ASSERT_GT(E, S - 2);
+  ASSERT_LT(E, 2 * (S - 2));
+  {
+    auto split = perinox::buildSplitLinearSolver(keptFactorsList(100, 0, true, E), comm);
+    for (const auto& A : {A0, A1, A1, A1}) {
+      const KeptSolve r = keptSolve(split, A);
+      EXPECT_LT(r.error, 1e-9);
+      renewed.push_back(r.iterations);
+    }
+    sRenewed = perinox::mumpsPreconditionerStatistics(*split.preconditioner);
+  }
+  EXPECT_EQ(renewed[0], 1);
+  EXPECT_EQ(renewed[1], S);
+  EXPECT_EQ(renewed[2], S);
+  EXPECT_EQ(renewed[3], 1);
+  EXPECT_EQ(sRenewed.factorizations, 2);
+  EXPECT_EQ(sRenewed.factorizationsDuringSolves, 0);
 }

@@ -60,6 +60,16 @@ def scenes(tiny):
                                           '        <Parameter name="Refactor Above Krylov Iterations" type="int" value="-3"/>\n'
                                           '      </ParameterList></ParameterList>\n'
                                           '    </ParameterList>'),
+        # ... a negative allowance of excess applications.
+        "mumps_excess_negative": edited(tiny, '<Parameter name="Linear Solver Preset" type="string" value="direct"/>',
+                                        '<Parameter name="Linear Solver Preset" type="string" value="custom"/>\n'
+                                        '    <ParameterList name="Linear Solver">\n'
+                                        '      <Parameter name="Linear Solver Type" type="string" value="Belos"/>\n'
+                                        '      <Parameter name="Preconditioner Type" type="string" value="MUMPS"/>\n'
+                                        '      <ParameterList name="Preconditioner Types"><ParameterList name="MUMPS">\n'
+                                        '        <Parameter name="Refactor Above Excess Applications" type="int" value="-1"/>\n'
+                                        '      </ParameterList></ParameterList>\n'
+                                        '    </ParameterList>'),
         # ... and an unknown precision for its factors.
         "mumps_precision_unknown": edited(tiny, '<Parameter name="Linear Solver Preset" type="string" value="direct"/>',
                                           '<Parameter name="Linear Solver Preset" type="string" value="custom"/>\n'

@@ -320,6 +320,10 @@ class MumpsLinearOpWithSolve : public Thyra::LinearOpWithSolveBase<double> {
 
 double seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
+/// Applications of fresh single- or double-precision factors a Newton system needs (one, two
+/// at the tightest Eisenstat-Walker tolerances): what a solve needs beyond it is the stale factors' cost.
+constexpr long long kFreshApplications = 2;
+
 /// The kept factors of a MUMPS preconditioner, what it is configured to do with them, how they
 /// were used, and the matrix of the current set-up (assembled when asked) for a factorisation
 /// during a solve. Shared by the factory and the operators its set-ups hand out.
@@ -328,11 +332,15 @@ struct KeptFactors {
   // fallback when the primary's factorisation failed.
   std::shared_ptr<MumpsContext> context, primary, fallback;
   // The configuration ('Ordering', 'Memory Relaxation Percent', 'Refactor Above Krylov
-  // Iterations', 'Refactor Within A Solve Above', 'Factor Precision' = Single).
-  int ordering = 7, memoryRelaxation = 30, refactorAbove = 20, withinSolveAbove = 0;
+  // Iterations', 'Refactor Within A Solve Above', 'Refactor Above Excess Applications', 'Factor
+  // Precision' = Single).
+  int ordering = 7, memoryRelaxation = 30, refactorAbove = 20, withinSolveAbove = 0, excessAbove = 0;
   bool singlePrecision = false;
   // Applications since the last factorisation within this set-up.
   long long sinceFactor = 0;
+  // Applications the solves since the last factorisation needed beyond what fresh factors need
+  // (kFreshApplications a solve): the price paid so far for keeping them.
+  long long excess = 0;
   // Whether this set-up factorised (at the set-up or during its solve): fresh factors are not
   // renewed again before the next set-up.
   bool factoredThisSetup = false;
@@ -365,6 +373,7 @@ struct KeptFactors {
     stats.factorBytes = std::max(stats.factorBytes, context->factorEntries() * context->bytesPerEntry());
     stats.bytesPerEntry = context->bytesPerEntry();
     sinceFactor = 0;
+    excess = 0;
     factoredThisSetup = true;
   }
 
@@ -423,6 +432,7 @@ const char* const kRelaxation = "Memory Relaxation Percent";
 const char* const kRefactor = "Refactor Above Krylov Iterations";
 const char* const kPrecision = "Factor Precision";
 const char* const kWithinSolve = "Refactor Within A Solve Above";
+const char* const kExcess = "Refactor Above Excess Applications";
 }  // namespace
 
 MumpsLinearOpWithSolveFactory::MumpsLinearOpWithSolveFactory() = default;
@@ -557,11 +567,15 @@ void MumpsPreconditionerFactory::initializePrec(const Teuchos::RCP<const Thyra::
     };
   }
   st.factoredThisSetup = false;
-  // Refactorise when there are no factors, the rows moved, or the last solve needed more than
-  // the allowed Krylov iterations with the kept ones (every rank has the same counts: the
+  if (st.context) st.excess += std::max(0LL, st.sinceFactor - kFreshApplications);
+  // Refactorise when there are no factors, the rows moved, the last solve needed more than the
+  // allowed Krylov iterations with the kept ones, or the solves since the last factorisation
+  // have together paid more than the allowed excess applications for keeping them (the rule of
+  // renting until the rent adds up to the price of buying; every rank has the same counts: the
   // Krylov solver's iterations are global).
   const bool refactor = !st.context || !st.context->factored() || st.context->rowMap().is_null() ||
-                        !st.context->rowMap()->isSameAs(*rows) || st.sinceFactor > st.refactorAbove;
+                        !st.context->rowMap()->isSameAs(*rows) || st.sinceFactor > st.refactorAbove ||
+                        (st.excessAbove > 0 && st.excess > st.excessAbove);
   if (refactor) {
     const auto matrix = st.matrix();
     if (matrix.is_null())
@@ -597,8 +611,10 @@ void MumpsPreconditionerFactory::setParameterList(const Teuchos::RCP<Teuchos::Pa
   st.refactorAbove = params_->get<int>(kRefactor);
   st.singlePrecision = params_->get<std::string>(kPrecision) == "Single";
   st.withinSolveAbove = params_->get<int>(kWithinSolve);
+  st.excessAbove = params_->get<int>(kExcess);
   if (st.memoryRelaxation < 0) throw std::invalid_argument("MUMPS: 'Memory Relaxation Percent' must be at least 0");
   if (st.refactorAbove < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Krylov Iterations' must be at least 0");
+  if (st.excessAbove < 0) throw std::invalid_argument("MUMPS: 'Refactor Above Excess Applications' must be at least 0");
   if (st.withinSolveAbove < 0) throw std::invalid_argument("MUMPS: 'Refactor Within A Solve Above' must be at least 0");
 }
 
@@ -620,6 +636,10 @@ Teuchos::RCP<const Teuchos::ParameterList> MumpsPreconditionerFactory::getValidP
     valid->set(kRefactor, 20,
                "keep the factors while a solve needs at most this many Krylov iterations with them; refactorise at the "
                "next set-up after one that needed more (0: every set-up)");
+    valid->set(kExcess, 0,
+               "also refactorise at the next set-up once the solves since the last factorisation have together applied the "
+               "factors this many times more than fresh factors would have (two a solve); about the cost of a factorisation "
+               "in applications pays the least in total (0: never)");
     valid->set(kPrecision, "Double",
                "precision of the kept factors: Double, or Single (MUMPS's single-precision interface: half the bytes, "
                "and solves that read half as much; the Krylov solver still converges in double precision)",
