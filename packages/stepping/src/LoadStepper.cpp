@@ -206,7 +206,10 @@ NewtonResult LoadStepper::counted(const std::function<NewtonResult(Thyra::Vector
 // damaged body cannot carry lam (the reload stalls at a limit point: the snap-back of a running
 // crack under displacement control), the state at the highest load reached is returned, that load
 // found to the policy's reload tolerance, and lam lowered to it; the stepping resumes from there
-// (an event-by-event trace of the snap-back).
+// (an event-by-event trace of the snap-back). The search keeps the bracket [mu, hi): mu the
+// highest load fraction reached, hi the lowest that failed from a state below it. A sub-step never
+// tries hi or above again (it would fail again, at several times the cost of a converged one), and
+// the search ends once hi - mu is within the tolerance.
 NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& lam, StepRecord& rec) {
   auto run = [&](Thyra::VectorBase<double>& x) { return counted(reequilibrate_, x); };
   auto x0 = xs.clone_v();
@@ -230,8 +233,9 @@ NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& l
     }
     auto xc = xs.clone_v();
     NewtonResult rc = r;
+    double hi = 2.0;  // the lowest fraction that failed (none yet)
     while (mu < 1.0 - 1e-12) {
-      const double t = std::min(1.0, mu + inc);
+      const double t = std::min({1.0, mu + inc, 0.5 * (mu + hi)});
       setLoadFactor(t * lam);
       Thyra::copy(*xc, Teuchos::ptrFromRef(xs));
       r = run(xs);
@@ -242,11 +246,11 @@ NewtonResult LoadStepper::reequilibrate(Thyra::VectorBase<double>& xs, double& l
         Thyra::copy(xs, xc.ptr());
         rc = r;
         inc *= 1.5;
-      } else if (t - mu <= damage_->reloadTolerance) {
-        break;  // the limit load lies in [mu, t)
       } else {
+        hi = t;
         inc = 0.5 * (t - mu);  // halve the sub-step that failed (not the grown one t clamped)
       }
+      if (hi - mu <= damage_->reloadTolerance) break;  // the limit load lies in [mu, hi)
     }
     if (mu > bestMu) {
       bestMu = mu;

@@ -296,3 +296,83 @@ TEST(LoadStepper, OptionsAreValidatedWithOneSentence) {
   // A model without a load-factor parameter is refused by the wrapper.
   EXPECT_THROW(LoadFactorModel(Teuchos::rcp(new Springs({1.0}, 0.0, {1.0}, 0))), std::invalid_argument);
 }
+
+namespace {
+/// A stall break that changes the load the body can carry: the first lowers it below the stalled
+/// load (a snap-back), the next lifts it (the crack has run through, say).
+class SnapBack : public DamagePolicy {
+ public:
+  SnapBack(double& limit, std::vector<double> limits) : limit_(limit), limits_(std::move(limits)) {}
+  Breaks breakAfterStep(const Thyra::VectorBase<double>&) override { return {}; }
+  Breaks breakOnStall(const Thyra::VectorBase<double>&, const std::string&) override {
+    Breaks b;
+    if (next_ < limits_.size()) {
+      limit_ = limits_[next_++];
+      b.brokenBonds = 1;
+    }
+    return b;
+  }
+
+ private:
+  double& limit_;
+  std::vector<double> limits_;
+  std::size_t next_ = 0;
+};
+}  // namespace
+
+TEST(LoadStepper, FindsASnapBacksLimitLoadToTheToleranceWithoutTryingALoadThatFailedAgain) {
+  // A stand-in for the solve: it converges exactly when the load factor is at most the body's
+  // limit, and a failure costs more iterations than a success (as stagnating Newton solves do).
+  // The intact body carries 0.5; the stall break there leaves one that carries 0.5 x 0.8731.
+  Rig s({1.0}, 0.0, {1.0});
+  double limit = 0.5;
+  std::vector<std::pair<double, bool>> tried;
+  auto solve = [&](Thyra::VectorBase<double>&) {
+    NewtonResult r;
+    const double lambda = s.model->loadFactor();
+    r.converged = lambda <= limit + 1e-12;
+    r.iterations = r.work = r.converged ? 2 : 5;
+    if (!r.converged) r.failure = "no equilibrium at this load";
+    tried.emplace_back(lambda, r.converged);
+    return r;
+  };
+  SnapBack policy(limit, {0.5 * 0.8731, 2.0});
+  policy.breakOnStalls = true;
+  policy.breakAtSnapBackLimit = true;
+  policy.reloadTolerance = 0.02;
+  LoadStepperOptions o;
+  o.loadSteps = 4;
+  o.minIncrement = 0.1;
+  LoadStepper stepper(s.model, solve, o);
+  stepper.setDamagePolicy(&policy);
+  Recorder rec;
+  stepper.addObserver(&rec);
+  ASSERT_TRUE(stepper.run()) << stepper.failure();
+  // The snap-back's step: the load lowered into [limit - tolerance x load, limit].
+  const StepRecord* snap = nullptr;
+  for (const auto& r : stepper.records())
+    if (r.reloadSteps > 0) snap = &r;
+  ASSERT_NE(snap, nullptr);
+  EXPECT_LE(snap->loadFactor, 0.5 * 0.8731 + 1e-12);
+  EXPECT_GT(snap->loadFactor, 0.5 * (0.8731 - 0.02));
+  // The reload's sub-steps, after the first that converged (from 0.7 of the load: 0.9 of it
+  // fails): none at or above a load that failed before, and the bracket closed in 7 sub-steps
+  // (0.9 F, 0.7, 0.775, 0.8875 F, 0.83125, 0.859375, 0.8734375 F of 0.5). Without the bracket
+  // the search tried 0.915 after 0.8875 had failed, and needed 12.
+  EXPECT_EQ(snap->reloadSteps, 7);
+  // The re-equilibration's first solve is the one at the stalled load that fails; its sub-steps follow.
+  std::size_t stall = 0;
+  while (stall < tried.size() && !(std::abs(tried[stall].first - 0.5) < 1e-12 && !tried[stall].second)) ++stall;
+  ASSERT_LT(stall + 7, tried.size());
+  std::size_t first = stall + 1;
+  while (!tried[first].second) ++first;
+  double lowestFailure = 1.0;
+  for (std::size_t i = first; i <= stall + 7; ++i) {
+    EXPECT_LT(tried[i].first, lowestFailure - 1e-12) << "sub-step " << i << " at " << tried[i].first;
+    if (!tried[i].second) lowestFailure = std::min(lowestFailure, tried[i].first);
+  }
+  EXPECT_LT(lowestFailure, 1.0);
+  bool noted = false;
+  for (const auto& n : rec.notes) noted = noted || n.find("cannot carry load factor 0.5 (snap-back)") != std::string::npos;
+  EXPECT_TRUE(noted);
+}
