@@ -3,6 +3,7 @@
 // volumes, centroids and node sets known in closed form (stated beside each mesh), and the bad
 // meshes the reader must refuse. Used by test_exodus_mesh.cpp and make_exodus_meshes.cpp.
 #include <exodusII.h>
+#include <netcdf.h>
 
 #include <array>
 #include <stdexcept>
@@ -47,9 +48,11 @@ inline void check(int rc, const char* what) {
   if (rc < 0) throw std::runtime_error(std::string("exodus test writer: ") + what + " failed");
 }
 
-inline void write(const std::string& path, const Mesh& m) {
+/// Writes m as an Exodus II file: classic netCDF (64-bit offsets, the library's default), or
+/// netCDF-4 (HDF5) when `netcdf4`.
+inline void write(const std::string& path, const Mesh& m, bool netcdf4 = false) {
   int cpu = sizeof(double), io = sizeof(double);
-  const int exo = ex_create(path.c_str(), EX_CLOBBER, &cpu, &io);
+  const int exo = ex_create(path.c_str(), EX_CLOBBER | (netcdf4 ? EX_NETCDF4 : 0), &cpu, &io);
   check(exo, "ex_create");
   check(ex_set_max_name_length(exo, 80), "ex_set_max_name_length");  // names beyond 32 characters
   int nelem = 0;
@@ -83,6 +86,19 @@ inline void write(const std::string& path, const Mesh& m) {
     if (!s.name.empty()) check(ex_put_name(exo, EX_SIDE_SET, s.id, s.name.c_str()), "ex_put_name");
   }
   check(ex_close(exo), "ex_close");
+}
+
+/// Replaces the element type name of the position-th element block (1-based) of a written mesh
+/// by `type`, of any length, through netCDF: the Exodus writer copies a type name into 33 bytes
+/// (a longer one aborts it), so a file with a long one, which the reader must refuse, is made here.
+inline void setElementType(const std::string& path, int position, const std::string& type) {
+  int nc = -1, var = -1;
+  if (nc_open(path.c_str(), NC_WRITE, &nc) != NC_NOERR) throw std::runtime_error("setElementType: cannot open " + path);
+  const std::string conn = "connect" + std::to_string(position);
+  const bool ok = nc_inq_varid(nc, conn.c_str(), &var) == NC_NOERR && nc_redef(nc) == NC_NOERR &&
+                  nc_put_att_text(nc, var, "elem_type", type.size() + 1, type.c_str()) == NC_NOERR && nc_enddef(nc) == NC_NOERR;
+  nc_close(nc);
+  if (!ok) throw std::runtime_error("setElementType: cannot write the element type of " + path);
 }
 
 /// A box of nx x ny x nz hexahedra of edge h from the origin; node (i, j, k) is number

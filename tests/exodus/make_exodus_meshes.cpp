@@ -11,9 +11,11 @@
 //                           meshes the reader must refuse
 //   usage: make_exodus_meshes DIR
 #include <cstdio>
+#include <string>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 
 #include "ExodusTestMeshes.hpp"
 
@@ -73,12 +75,54 @@ int main(int argc, char** argv) {
     // The two-material bar of blocks_exodus_bar (tests/exodus/bimaterial_bar_exodus.xml): 40 x 4 x 4
     // hexahedra of edge 0.05 (L = 2, section 0.2 x 0.2), blocks 1 ('left part', x < 1) and 2.
     exotest::write(dir + "/bimaterial_bar.e", exotest::hexBox(40, 4, 4, 0.05, 20));
+    // bar.e in netCDF-4 (HDF5), which the reader reads as it reads classic files; and cut short.
+    exotest::write(dir + "/bar_netcdf4.e", exotest::hexBox(nx, ny, nz, h, nx / 2), true);
+    {
+      std::ifstream in(dir + "/bar_netcdf4.e", std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      std::ofstream(dir + "/bar_netcdf4_cut.e", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    }
+    {  // the classic bar.e cut to two thirds: its header declares data beyond the end
+      std::ifstream in(dir + "/bar.e", std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      std::ofstream(dir + "/bar_cut.e", std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3);
+    }
+    // bar.e's counts with another edge: another body that a checkpoint must not resume on.
+    exotest::write(dir + "/bar_scaled.e", exotest::hexBox(nx, ny, nz, 0.26, nx / 2));
     exotest::write(dir + "/inverted.e", exotest::invertedHex());
     exotest::write(dir + "/flat_tet.e", exotest::flatTet());
     exotest::write(dir + "/pyramid.e", exotest::pyramid());
     exotest::write(dir + "/no_blocks.e", exotest::noBlocks());
     exotest::write(dir + "/sphere_no_volume.e", exotest::sphereWithoutVolume());
     std::ofstream(dir + "/not_exodus.e") << "this is a text file, not a mesh\n";
+    // Untrusted files: an element type name longer than Exodus' 32 characters (the library copies
+    // it whole into a fixed buffer), a duplicated element, a negative block id, and an element far
+    // from the others (no neighbour within the horizon).
+    for (int length : {40, 200, 5000}) {
+      const std::string path = dir + "/long_type_" + std::to_string(length) + ".e";
+      exotest::write(path, exotest::hexBox(2, 1, 1, 1.0, 9));
+      exotest::setElementType(path, 1, "HEX8" + std::string(static_cast<std::size_t>(length - 4), 'X'));
+    }
+    {
+      exotest::Mesh m = exotest::hexBox(4, 2, 2, 0.25, 9);
+      auto& conn = m.blocks[0].conn;
+      conn.insert(conn.end(), conn.begin(), conn.begin() + 8);  // element 1 again, as the last one
+      exotest::write(dir + "/duplicate_element.e", m);
+    }
+    {
+      exotest::Mesh m = exotest::hexBox(4, 2, 2, 0.25, 2);
+      m.blocks[1].id = -3;
+      exotest::write(dir + "/negative_block.e", m);
+    }
+    {
+      exotest::Mesh m = exotest::hexBox(16, 4, 4, 0.25, 8);
+      const int first = static_cast<int>(m.nodes.size()) + 1;
+      for (int k = 0; k < 2; ++k)  // a unit-edge cube of edge 0.25 at x = 100: the stray element
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i) m.nodes.push_back({100 + 0.25 * i, 0.25 * j, 0.25 * k});
+      for (int n : {0, 1, 3, 2, 4, 5, 7, 6}) m.blocks[1].conn.push_back(first + n);
+      exotest::write(dir + "/stray_element.e", m);
+    }
   } catch (const std::exception& e) {
     std::cerr << e.what() << "\n";
     return 1;

@@ -3,11 +3,14 @@
 // calls: ex_get_init, ex_get_elem_block, ex_get_elem_conn, ...), only when perinox was built
 // with it (PERINOX_HAVE_EXODUS).
 #include "perinox/core/ExodusMesh.hpp"
+#include "perinox/core/InputFile.hpp"
+#include "NetcdfHeader.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -15,6 +18,7 @@
 
 #ifdef PERINOX_HAVE_EXODUS
 #include <exodusII.h>
+#include <netcdf.h>
 #endif
 
 namespace perinox {
@@ -221,7 +225,7 @@ std::string entityName(int exo, ex_entity_type type, int id) {
 
 std::string blockLabel(int id, const std::string& name) {
   const bool given = !name.empty() && name != "block_" + std::to_string(id);
-  return "element block " + std::to_string(id) + (given ? " ('" + name + "')" : "");
+  return "element block " + std::to_string(id) + (given ? " ('" + printable(name) + "')" : "");
 }
 
 }  // namespace
@@ -231,6 +235,7 @@ namespace {
 /// Refuses a file that is not netCDF (classic/64-bit offset "CDF\001", "CDF\002", "CDF\005", or
 /// netCDF-4 on HDF5 "\211HDF") before the Exodus library sees it.
 void checkNetcdf(const std::string& path) {
+  requireRegularFile(path, "Exodus mesh");
   std::ifstream probe(path, std::ios::binary);
   if (!probe) fail(path, "cannot open the Exodus mesh for reading (no such file, or not readable)");
   char magic[4] = {0, 0, 0, 0};
@@ -238,6 +243,19 @@ void checkNetcdf(const std::string& path) {
   const bool cdf = magic[0] == 'C' && magic[1] == 'D' && magic[2] == 'F';
   const bool hdf = magic[1] == 'H' && magic[2] == 'D' && magic[3] == 'F';
   if (!cdf && !hdf) fail(path, "is not an Exodus II file (not a netCDF file)");
+  if (cdf) {
+    try {
+      checkClassicNetcdfHeader(path);
+    } catch (const std::runtime_error& e) {
+      fail(path, std::string(e.what()) + " (a damaged Exodus II file)");
+    }
+  }
+  // netCDF-4 (HDF5) files are read too. One that netCDF cannot open is refused here: the Exodus
+  // library would print three lines of its own, blaming a netCDF without netCDF-4 support.
+  int nc = -1;
+  if (hdf && nc_open(path.c_str(), NC_NOWRITE, &nc) != NC_NOERR)
+    fail(path, "is an HDF5 file that netCDF cannot read (a damaged netCDF-4 Exodus II file, or not one)");
+  if (nc >= 0) nc_close(nc);
 }
 
 /// The mesh's header.
@@ -252,6 +270,11 @@ MeshHeader readHeader(int exo, const std::string& path, int dim) {
     fail(path, "is not an Exodus II file (no Exodus header)");
   if (h.numBlocks <= 0) fail(path, "has no element blocks");
   if (h.numElem <= 0) fail(path, "has no elements");
+  if (h.numElem > kMaxParticles || h.numNodes > 8 * kMaxParticles || h.numBlocks > kMaxParticles ||
+      h.numNodeSets > kMaxParticles || h.numSideSets > kMaxParticles)
+    fail(path, "declares " + std::to_string(h.numElem) + " elements, " + std::to_string(h.numNodes) + " nodes and " +
+                   std::to_string(h.numBlocks) + " blocks: more than perinox reads (at most " + std::to_string(kMaxParticles) +
+                   " elements, one particle each)");
   if (h.numDim < 2 || h.numDim > 3) fail(path, "has " + std::to_string(h.numDim) + "-dimensional coordinates (2 or 3 are read)");
   if (dim == 3 && h.numDim < 3) fail(path, "is a 2D mesh but the scene is 3D ('Discretization/Dimension' = 3)");
   return h;
@@ -281,23 +304,45 @@ struct BlockLayout {
   int count = 0, nodesPer = 0, attrs = 0, corners = 0;
 };
 
-BlockLayout readBlockLayout(int exo, const std::string& path, int dim, MeshBlock& blk) {
+/// The element type name of the position-th element block (1-based), read through netCDF into a
+/// buffer of the attribute's own length: the Exodus library copies the whole attribute into the
+/// caller's MAX_STR_LENGTH + 1 characters, however long the file says it is.
+std::string elementTypeName(int exo, const std::string& path, int position, const MeshBlock& blk) {
+  int var = -1;
+  nc_type kind = NC_NAT;
+  std::size_t length = 0;
+  const std::string conn = "connect" + std::to_string(position);
+  if (nc_inq_varid(exo, conn.c_str(), &var) != NC_NOERR || nc_inq_att(exo, var, "elem_type", &kind, &length) != NC_NOERR ||
+      kind != NC_CHAR)
+    fail(path, "has an unreadable " + blockLabel(blk.id, blk.name) + " (no element type)");
+  if (length > MAX_STR_LENGTH + 1)
+    fail(path, blockLabel(blk.id, blk.name) + " has an element type name of " + std::to_string(length) +
+                   " bytes, longer than Exodus' " + std::to_string(MAX_STR_LENGTH) + " characters");
+  std::string type(length, '\0');
+  if (length > 0 && nc_get_att_text(exo, var, "elem_type", type.data()) != NC_NOERR)
+    fail(path, "has an unreadable " + blockLabel(blk.id, blk.name) + " (no element type)");
+  type.resize(std::strlen(type.c_str()));  // up to the first NUL
+  return type;
+}
+
+BlockLayout readBlockLayout(int exo, const std::string& path, int dim, int position, MeshBlock& blk) {
   BlockLayout L;
+  blk.elementType = elementTypeName(exo, path, position, blk);
+  // Only now may the library copy the type name: it fits MAX_STR_LENGTH + 1 characters.
   char type[MAX_STR_LENGTH + 1] = {0};
   if (ex_get_elem_block(exo, blk.id, type, &L.count, &L.nodesPer, &L.attrs) < 0)
     fail(path, "has an unreadable " + blockLabel(blk.id, blk.name));
-  blk.elementType = type;
   blk.elements = L.count;
   if (L.count == 0) return L;
   const std::string where = blockLabel(blk.id, blk.name);
   L.shape = shapeOf(blk.elementType, L.nodesPer, L.corners);
   if (L.shape == Shape::Unsupported)
-    fail(path, where + " has elements of type '" + blk.elementType + "' with " + std::to_string(L.nodesPer) +
+    fail(path, where + " has elements of type '" + printable(blk.elementType) + "' with " + std::to_string(L.nodesPer) +
                    " nodes, which perinox does not read (hex, tet, wedge and sphere in 3D; quad, tri and sphere in 2D)");
   if (dim == 3 && (L.shape == Shape::Quad || L.shape == Shape::Tri))
-    fail(path, where + " has 2D elements ('" + blk.elementType + "') but the scene is 3D ('Discretization/Dimension' = 3)");
+    fail(path, where + " has 2D elements ('" + printable(blk.elementType) + "') but the scene is 3D ('Discretization/Dimension' = 3)");
   if (dim == 2 && threeD(L.shape))
-    fail(path, where + " has 3D elements ('" + blk.elementType + "') but the scene is 2D ('Discretization/Dimension' = 2)");
+    fail(path, where + " has 3D elements ('" + printable(blk.elementType) + "') but the scene is 2D ('Discretization/Dimension' = 2)");
   if (L.shape == Shape::Sphere && L.attrs < 2)  // Peridigm's rule: attribute 1 the radius, 2 the volume
     fail(path, where + " has sphere elements with " + std::to_string(L.attrs) +
                    " attribute(s); the volume is read from the second attribute (radius, volume)");
@@ -335,11 +380,15 @@ void openMesh(const std::string& path, int dim, OpenMesh& m) {
     if (blk.name.empty()) blk.name = "block_" + std::to_string(id);  // Peridigm's name for an unnamed block
     for (const MeshBlock& other : m.blocks)
       if (other.id == id) fail(path, "has two element blocks with id " + std::to_string(id));
-    m.layouts.push_back(readBlockLayout(exo, path, dim, blk));
+    if (id < 0) fail(path, "has element block id " + std::to_string(id) + " (block ids must be 0 or more, as 'Blocks' names them)");
+    m.layouts.push_back(readBlockLayout(exo, path, dim, static_cast<int>(m.blocks.size()) + 1, blk));
     m.elements += m.layouts.back().count;
     m.blocks.push_back(blk);
   }
   if (m.elements == 0) fail(path, "has no elements in its element blocks");
+  if (m.elements != m.h.numElem)
+    fail(path, "has " + std::to_string(m.elements) + " elements in its element blocks but declares " + std::to_string(m.h.numElem) +
+                   " (a damaged Exodus II file)");
 }
 
 /// Centroid and volume of one element from its corners (sphere: the node and the volume
@@ -360,6 +409,9 @@ Measure elementMeasure(const std::string& path, const std::string& element, cons
         fail(path, element + " is a sphere with volume " + num(m.volume) + " (its second attribute must be positive)");
       m.ok = true;
   }
+  if (m.ok && m.volume < kSmallestVolume)
+    fail(path, element + " ('" + type + "') has volume " + num(m.volume) + ", below " + num(kSmallestVolume) +
+                   " (products of two volumes would underflow)");
   if (!m.ok) {
     if (m.volume == 0) fail(path, element + " ('" + type + "') has zero volume (degenerate: coincident or flat corners)");
     fail(path, element + " ('" + type + "') is inverted or degenerate (its Jacobian determinant is not positive everywhere: " +
@@ -444,7 +496,7 @@ void readElements(const OpenMesh& m, const std::string& path, double thickness, 
         elementsOfNode.emplace_back(node, static_cast<int>(d.X.size()));
       }
       const double sphereVolume = L.shape == Shape::Sphere ? s.attr[static_cast<std::size_t>(e) * L.attrs + 1] : 0.0;
-      Measure me = elementMeasure(path, element, blk.elementType, L.shape, x, sphereVolume);
+      Measure me = elementMeasure(path, element, printable(blk.elementType), L.shape, x, sphereVolume);
       if (L.shape == Shape::Quad || L.shape == Shape::Tri) me.volume *= thickness;
       if (d.dim == 2) me.centroid[2] = 0;  // 2D: the x-y plane (as particle files do)
       d.X.push_back(me.centroid);

@@ -39,7 +39,7 @@ Grid makeGrid(const Discretization& d) {
       hi[a] = std::max(hi[a], x[a]);
     }
     if (!std::isfinite(hi[a] - g.lo[a]))
-      throw std::invalid_argument("buildFamilies: particle coordinates span too large a range");
+      throw std::invalid_argument("the particle coordinates span too large a range for the neighbour search (a coordinate near the largest double)");
   }
   // Slightly above the search radius horizon * (1 + 1e-12), so that a neighbour can never be
   // two cells away because of rounding.
@@ -130,16 +130,16 @@ void search(Discretization& d, const Grid& g) {
 
 void buildFamilies(Discretization& d) {
   if (d.dim < 1 || d.dim > 3)
-    throw std::invalid_argument("buildFamilies: dimension must be 1, 2 or 3 (got " +
+    throw std::invalid_argument("the neighbour search: dimension must be 1, 2 or 3 (got " +
                                 std::to_string(d.dim) + ")");
   if (!(d.horizon > 0.0) || !std::isfinite(d.horizon))
-    throw std::invalid_argument("buildFamilies: horizon must be positive and finite (got " +
+    throw std::invalid_argument("the horizon must be positive and finite (got " +
                                 std::to_string(d.horizon) + ")");
   if (d.X.size() > static_cast<std::size_t>(INT_MAX))
-    throw std::invalid_argument("buildFamilies: too many particles for int ids");
+    throw std::invalid_argument("too many particles (more than 2^31 - 1)");
   for (const Vec3& x : d.X)
     if (!x.allFinite())
-      throw std::invalid_argument("buildFamilies: a particle position is not finite");
+      throw std::invalid_argument("a particle position is not finite");
   if (d.X.empty()) {
     d.familyOffset.assign(1, 0);
     d.familyIndex.clear();

@@ -1,5 +1,6 @@
 // Particle files: one particle per line, "x y z volume [block]"; '#' starts a comment.
 #include "perinox/core/Discretization.hpp"
+#include "perinox/core/InputFile.hpp"
 
 #include <cerrno>
 #include <climits>
@@ -20,14 +21,15 @@ namespace {
 /// Parses a whole token as a double; false on trailing garbage ("1.0x") or no number at all.
 /// Overflow ("1e999") parses to +-inf and is rejected later as non-finite.
 bool parseDouble(const std::string& tok, double& out) {
+  if (!decimalCharacters(tok)) return false;  // scenes' rule: no hexadecimal, nan or inf
   const char* s = tok.c_str();
   char* endp = nullptr;
   out = std::strtod(s, &endp);
   return endp != s && *endp == '\0';
 }
 
-/// A token for a message: cut to 40 characters.
-std::string shown(const std::string& tok) { return tok.size() > 40 ? tok.substr(0, 40) + "..." : tok; }
+/// A token for a message: printable, cut to 40 characters.
+std::string shown(const std::string& tok) { return printable(tok); }
 
 std::string num(double v) {
   std::ostringstream os;
@@ -65,8 +67,13 @@ void parseLine(const std::string& path, long lineNo, std::string text, Discretiz
   int n = 0;
   while (ls >> tok) {
     if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
-    if (!parseDouble(tok, v[n]))
+    if (!parseDouble(tok, v[n])) {
+      char* end = nullptr;
+      const double spelled = std::strtod(tok.c_str(), &end);  // nan, inf, infinity: a number, not finite
+      if (end != tok.c_str() && *end == '\0' && !std::isfinite(spelled) && tok.find_first_of("xX") == std::string::npos)
+        fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
       fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected \"x y z volume [block]\")");
+    }
     if (!std::isfinite(v[n])) fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
     ++n;
   }
@@ -74,13 +81,17 @@ void parseLine(const std::string& path, long lineNo, std::string text, Discretiz
   if (n < 4)
     fail(path, lineNo, "expected at least 4 numbers \"x y z volume [block]\", found " + std::to_string(n));
   if (!(v[3] > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(v[3]) + ")");
+  if (v[3] < kSmallestVolume)
+    fail(path, lineNo, "volume " + num(v[3]) + " is below " + num(kSmallestVolume) + " (products of two volumes would underflow)");
   int blk = 1;
   if (n == 5) {
     // Accept "2" and "2.0" but not "2.5": block ids are integers.
-    if (v[4] != std::floor(v[4]) || std::abs(v[4]) > INT_MAX)
-      fail(path, lineNo, "block id must be an integer (got " + num(v[4]) + ")");
+    if (v[4] != std::floor(v[4]) || v[4] < 0 || v[4] > INT_MAX)
+      fail(path, lineNo, "block id must be an integer of 0 or more (got " + num(v[4]) + ")");
     blk = static_cast<int>(v[4]);
   }
+  if (static_cast<long long>(d.X.size()) >= kMaxParticles)
+    fail(path, lineNo, "more than " + std::to_string(kMaxParticles) + " particles (the most perinox reads)");
   Vec3 x = Vec3::Zero();  // unused axes are present in the file but forced to 0
   for (int a = 0; a < d.dim; ++a) x[a] = v[a];
   d.X.push_back(x);
@@ -104,6 +115,7 @@ void finish(Discretization& d) {
 }
 
 std::ifstream openParticleFile(const std::string& path) {
+  requireRegularFile(path, "particle file");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, 0, "cannot open particle file for reading");
   return in;
