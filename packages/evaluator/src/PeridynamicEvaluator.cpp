@@ -76,12 +76,36 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
   if (!problem_) throw std::invalid_argument("ProblemSpec: the evaluator was given no problem");
   validateTogether(*comm_, *problem_);
   const ProblemSpec& P = *problem_;
+  // Each rank's families and model are its own work: a refusal there (a particle whose family
+  // does not span the space, coincident particles) is agreed by all ranks before any collective.
+  owned_ = P.distributed ? P.owned : perinox::ownedParticles(comm_, P.disc, P.partition);  // collective
+  agreeOnSetUp(*comm_, [&] { buildModel(); });
+  dofs_ = DofMaps(comm_, P, model_->particles());
+  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_, families_);
+  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_, families_);
+  buildExternalForce();
+  computeRoundoffScale();
+  {  // every rank takes the same branch in loadDerivative (a distributed share may prescribe none)
+    int mine = P.prescribesDisplacement() ? 1 : 0, any = 0;
+    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(any));
+    prescribesDisplacement_ = any != 0;
+  }
+  xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(dofs_.ownedFree);
+  // The load factor: one value, replicated on every rank.
+  pSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(Tpetra::createLocalMapWithNode<LO, GO, Node>(1, comm_));
+  nominal_ = createInArgs();
+  auto x0 = Thyra::createMember(xSpace_);
+  Thyra::assign(x0.ptr(), 0.0);
+  nominal_.set_x(x0);
+}
+
+// This rank's particles (owned, ghosts, families) and the model with the problem's effects.
+void PeridynamicEvaluator::buildModel() {
+  const ProblemSpec& P = *problem_;
   LocalParticles lp;
   if (!P.distributed) {
-    owned_ = perinox::ownedParticles(comm_, P.disc, P.partition);
     lp = localParticles(P.disc, owned_, &families_);
   } else {  // the share's indices are ascending in global id: the same order, renamed
-    owned_ = P.owned;
     std::vector<long long> ownedIndex;
     for (long long g : owned_) ownedIndex.push_back(P.index(g));
     lp = localParticles(P.disc, ownedIndex, &families_);
@@ -113,24 +137,6 @@ PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>
     if (P.stabilization) model_->enableStabilization(stab);
     if (P.damage) model_->enableDamage(laws);
   }
-
-  dofs_ = DofMaps(comm_, P, model_->particles());
-  assembler_ = std::make_unique<Assembler>(comm_, P, *model_, dofs_, families_);
-  damage_ = std::make_unique<DamageBookkeeping>(comm_, P, *model_, dofs_, families_);
-  buildExternalForce();
-  computeRoundoffScale();
-  {  // every rank takes the same branch in loadDerivative (a distributed share may prescribe none)
-    int mine = P.prescribesDisplacement() ? 1 : 0, any = 0;
-    Teuchos::reduceAll(*comm_, Teuchos::REDUCE_MAX, mine, Teuchos::outArg(any));
-    prescribesDisplacement_ = any != 0;
-  }
-  xSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(dofs_.ownedFree);
-  // The load factor: one value, replicated on every rank.
-  pSpace_ = Thyra::createVectorSpace<double, LO, GO, Node>(Tpetra::createLocalMapWithNode<LO, GO, Node>(1, comm_));
-  nominal_ = createInArgs();
-  auto x0 = Thyra::createMember(xSpace_);
-  Thyra::assign(x0.ptr(), 0.0);
-  nominal_.set_x(x0);
 }
 
 // External force on owned free DOFs at load factor 1: f_ext = V b.

@@ -653,6 +653,26 @@ struct ImplD final : Model::Impl {
   }
 };
 
+/// Refuses two particles at one position (a repeated line of a particle file, a duplicated mesh
+/// element): each would carry the whole volume there, so the body would be counted twice. Closer
+/// than 1e-9 of the family's longest bond counts as one position.
+void checkCoincident(const LocalParticles& p) {
+  for (int i = 0; i < p.numOwned; ++i) {
+    double longest = 0;
+    for (auto q = p.famOffset[i]; q < p.famOffset[i + 1]; ++q)
+      longest = std::max(longest, (p.X[p.famIndex[q]] - p.X[i]).norm());
+    for (auto q = p.famOffset[i]; q < p.famOffset[i + 1]; ++q) {
+      const int j = p.famIndex[q];
+      if ((p.X[j] - p.X[i]).norm() > 1e-9 * longest) continue;
+      std::ostringstream s;
+      s.precision(10);
+      s << "particles " << std::min(p.globalId[i], p.globalId[j]) << " and " << std::max(p.globalId[i], p.globalId[j])
+        << " coincide (both at X = " << p.X[i].head(p.dim).transpose() << "); remove one of them";
+      throw std::invalid_argument(s.str());
+    }
+  }
+}
+
 }  // namespace
 
 Model::Model(const MaterialSpec& material, LocalParticles particles)
@@ -678,6 +698,7 @@ Model::Model(const std::vector<MaterialSpec>& materials, LocalParticles particle
     case 3: impl_ = std::make_unique<ImplD<3>>(); break;
     default: throw std::invalid_argument("model dimension must be 1, 2 or 3");
   }
+  checkCoincident(particles_);
   checkShapeTensors();
   familyVolume0_.assign(particles_.numOwned, 0.0);
   for (int i = 0; i < particles_.numOwned; ++i)

@@ -4,7 +4,10 @@
 // is left waiting in a later collective for one that stopped.
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_CommHelpers.hpp>
+#include <stdexcept>
 #include <string>
+
+#include "perinox/model/Model.hpp"
 
 namespace perinox {
 
@@ -37,6 +40,29 @@ void throwAgreed(const Teuchos::Comm<int>& comm, F&& f) {
   }
   msg = lowestRankMessage(comm, msg);
   if (!msg.empty()) throw E(msg);
+}
+
+/// Runs f on every rank, for rank-local set-up work (a rank's families, its model) before the next
+/// collective. If f throws on any rank, every rank throws once all have run f, with the lowest
+/// failing rank's sentence: std::invalid_argument when that rank's error was about the input
+/// (std::invalid_argument, or an EvaluationError such as a singular shape tensor), otherwise
+/// std::runtime_error. Without this, a rank that refuses alone leaves the others waiting.
+template <class F>
+void agreeOnSetUp(const Teuchos::Comm<int>& comm, F&& f) {
+  std::string msg;
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    msg = std::string("I") + e.what();
+  } catch (const EvaluationError& e) {
+    msg = std::string("I") + e.what();
+  } catch (const std::exception& e) {
+    msg = std::string("R") + e.what();
+  }
+  msg = lowestRankMessage(comm, msg);
+  if (msg.empty()) return;
+  if (msg[0] == 'I') throw std::invalid_argument(msg.substr(1));
+  throw std::runtime_error(msg.substr(1));
 }
 
 }  // namespace perinox

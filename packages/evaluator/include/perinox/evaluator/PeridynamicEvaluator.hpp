@@ -179,6 +179,7 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// Owned-all internal force vector (owned particles * dim) at x (with W: the Jacobian too).
   Teuchos::RCP<TVector> internalForce(const Thyra::VectorBase<double>& x, TCrsMatrix* W,
                                       bool neighbours = false) const;
+  void buildModel();
   void buildExternalForce();
   void computeRoundoffScale();
   double reactionNormOf(const TVector& fint) const;
