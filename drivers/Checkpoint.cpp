@@ -5,6 +5,7 @@
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -57,6 +58,23 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
   });
 }
 
+std::string inputFileHash(const Scene& scene) {
+  if (scene.inputFile.empty()) return "";
+  std::ifstream in(scene.inputFile, std::ios::binary);
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a, 64 bits: a content check, not a cryptographic one
+  std::vector<char> buf(1 << 16);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    for (std::streamsize k = 0; k < in.gcount(); ++k) {
+      h ^= static_cast<unsigned char>(buf[static_cast<std::size_t>(k)]);
+      h *= 1099511628211ull;
+    }
+  }
+  std::ostringstream s;
+  s << std::hex << std::setw(16) << std::setfill('0') << h;
+  return s.str();
+}
+
 namespace {
 
 /// state.json, parsed, with the keys every checkpoint has.
@@ -73,11 +91,19 @@ nlohmann::json readState(const std::string& dir, const std::string& where) {
     throw std::invalid_argument(where + ": state.json is truncated or damaged (not valid JSON at byte " +
                                 std::to_string(e.byte) + ")");
   }
+  if (!state.is_object()) throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (not a JSON object)");
+  for (const char* k : {"format", "ranks"})
+    if (state.contains(k) && !state[k].is_number_integer())
+      throw std::invalid_argument(where + ": state.json is damaged ('" + k + "' is not a whole number)");
+  if (state.contains("scene") && !state["scene"].is_string())
+    throw std::invalid_argument(where + ": state.json is damaged ('scene' is not the scene's text)");
   if (state.value("format", 0) == 1)
-    throw std::invalid_argument(where + ": a checkpoint of format 1 (before session 11: keyed by free-DOF numbers), "
+    throw std::invalid_argument(where + ": a checkpoint of format 1 (keyed by free-DOF numbers, written by an older perinox), "
                                         "which this perinox does not read; rerun from the start or with the perinox that wrote it");
   if (state.value("format", 0) != 2 || !state.contains("scene") || !state.contains("ranks"))
     throw std::invalid_argument(where + ": state.json is not a perinox checkpoint (format 2)");
+  if (state["ranks"].get<long long>() < 1 || state["ranks"].get<long long>() > 1000000)
+    throw std::invalid_argument(where + ": state.json is damaged ('ranks' = " + state["ranks"].dump() + " is not in [1, 1000000])");
   return state;
 }
 
@@ -193,8 +219,23 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     if (state.at("steps").size() != state.at("step").get<std::size_t>())
       throw std::runtime_error("it records " + std::to_string(state.at("steps").size()) + " steps, not 'step' = " +
                                state.at("step").dump());
-    for (const auto& sj : state.at("steps")) (void)stepFromJson(sj);
+    // The records are steps 1, 2, ... and the state's load factor is the last one's: a state.json
+    // whose counters and records disagree was not written by a run.
+    double recorded = 0;
+    long long number = 0;
+    for (const auto& sj : state.at("steps")) {
+      const StepRecord r = stepFromJson(sj);
+      if (r.step != ++number) throw std::runtime_error("step record " + std::to_string(number) + " says step " + std::to_string(r.step));
+      if (!(r.loadFactor >= -1.0 && r.loadFactor <= 1.0))
+        throw std::runtime_error("step " + std::to_string(r.step) + " records the load factor " + sj.at("load_factor").dump());
+      recorded = r.loadFactor;
+    }
+    if (state.at("lambda").get<double>() != recorded)
+      throw std::runtime_error("'lambda' = " + state.at("lambda").dump() + " is not the load factor " + std::to_string(recorded) +
+                               " of its last step record");
     (void)state.at("path_load_factors").get<std::vector<double>>();
+    if (!scene.problem->damage && !state.at("detached").empty())
+      throw std::runtime_error("it lists detached particles, but the scene has no damage");
     for (long long id : state.at("detached").get<std::vector<long long>>())
       if (id < 0 || id >= particles)
         throw std::runtime_error("detached particle " + std::to_string(id) + " is not one of the " +
@@ -203,7 +244,10 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
     for (const auto& p : probes) (void)p.get<std::vector<std::pair<double, std::vector<double>>>>();
   } catch (const std::exception& e) {
-    throw std::invalid_argument(where + ": state.json is incomplete or damaged (" + e.what() + ")");
+    // nlohmann's sentences start with their own tag ("[json.exception.type_error.302] "): cut it.
+    std::string why = e.what();
+    if (why.rfind("[json.exception", 0) == 0 && why.find("] ") != std::string::npos) why = why.substr(why.find("] ") + 2);
+    throw std::invalid_argument(where + ": state.json is incomplete or damaged (" + why + ")");
   }
 }
 
@@ -228,7 +272,9 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
     ok = ok && end && *end == '\0' && end != t.c_str() && std::isfinite(v);
     return v;
   };
+  long long lineNo = 0;
   while (std::getline(in, line)) {
+    ++lineNo;
     std::istringstream ls(line);
     ls >> kind;
     long long g = 0, h = 0;
@@ -241,15 +287,17 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
         c.xPrevious.emplace_back(g, number(v2, ok));
       }
     } else if (kind == "bond") {
-      ok = static_cast<bool>(ls >> g >> h) && g >= 0 && h >= 0 && g < particles && h < particles && g != h;
+      ok = P.damage && static_cast<bool>(ls >> g >> h) && g >= 0 && h >= 0 && g < particles && h < particles && g != h;
       if (ok) c.broken.emplace_back(g, h);
     } else if (kind == "frozen") {
-      ok = static_cast<bool>(ls >> g >> v1) && freeDof(g);
+      ok = P.damage && static_cast<bool>(ls >> g >> v1) && freeDof(g);
       if (ok) c.frozen.emplace_back(g, number(v1, ok));
     } else {
       ok = false;
     }
-    if (!ok) throw std::invalid_argument(where + ": unreadable line in " + f + ": '" + line + "'");
+    if (!ok && !P.damage && (kind == "bond" || kind == "frozen"))
+      throw std::invalid_argument(where + ": " + f + " holds broken bonds or frozen values, but the scene has no damage");
+    if (!ok) throw std::invalid_argument(where + ": unreadable line " + std::to_string(lineNo) + " in " + f);
   }
 }
 
@@ -333,6 +381,12 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
     c.state = readState(dir, where);
     checkSameScene(scene, c.state, where);
     checkStateValues(c.state, scene, particles, where);
+    // The particle file or mesh by content: another file with the same counts is another body.
+    // (A checkpoint of a perinox that did not record it is taken as it is.)
+    if (c.state.contains("input_hash") &&
+        (!c.state["input_hash"].is_string() || c.state["input_hash"].get<std::string>() != inputFileHash(scene)))
+      throw std::invalid_argument(where + " is for another body: '" + fs::path(scene.inputFile).filename().string() +
+                                  "' is not the file it was written with (its content differs)");
     ranks = c.state["ranks"];
   });
   throwAgreed<std::invalid_argument>(comm, [&] {
@@ -395,6 +449,8 @@ void CheckpointWriter::accepted(const StepInfo& s) {
   for (const auto& pr : res_.probes) probes.push_back(pr.second);
   st["probes"] = probes;
   st["detached"] = ev_.detachedParticles();
+  if (!inputHash_) inputHash_ = comm_.getRank() == 0 ? inputFileHash(scene_) : std::string();
+  if (!inputHash_->empty()) st["input_hash"] = *inputHash_;
   writeCheckpoint(folder_, st, ev_, s.x, stepper_.previous(), comm_);
   last_ = wallSeconds();
   if (comm_.getRank() == 0 && !options_.quiet)

@@ -4,6 +4,7 @@
 #include <Teuchos_Comm.hpp>
 #include <Thyra_VectorBase.hpp>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +29,9 @@ struct Checkpoint {
   std::vector<std::pair<long long, long long>> broken;
 };
 
+/// A hash (FNV-1a, 16 hex digits) of the scene's particle file or mesh, "" for a lattice: a
+/// checkpoint is tied to the body it was written for by content, not only by its counts.
+std::string inputFileHash(const Scene& scene);
 /// The resolved scene as XML text (a checkpoint keeps it; a resumed run must match it).
 std::string resolvedSceneText(const Scene& scene);
 
@@ -67,6 +71,7 @@ class CheckpointWriter final : public StepObserver {
   double t0_, elapsedBefore_;
   int segment_;
   double last_;
+  std::optional<std::string> inputHash_;  // of the particle file or mesh, at the first checkpoint (rank 0)
 };
 
 }  // namespace perinox

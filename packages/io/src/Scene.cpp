@@ -27,6 +27,7 @@
 
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
+#include "perinox/core/InputFile.hpp"
 #include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/evaluator/Problem.hpp"
@@ -50,7 +51,6 @@ constexpr int kMaxTotalSteps = 20 * kMaxLoadSteps;  // the default, 20 x Load St
 constexpr int kMaxArcSteps = 1000000;
 constexpr int kMaxNewtonIterations = 1000;
 constexpr int kMaxCutbacks = 60;                    // 2^-60 of an increment is below round-off
-constexpr long long kMaxParticles = 50000000;       // lattice sites, fictitious layers included
 constexpr double kMaxHorizonFactor = 50.0;          // horizon / spacing
 constexpr std::size_t kMaxMessage = 300;            // characters of a message after the file name
 
@@ -799,7 +799,7 @@ std::string numberProblem(const std::string& text, bool integer) {
   }
   const double v = t.empty() ? 0 : std::strtod(t.c_str(), &end);
   if (!t.empty() && !*end && !std::isfinite(v)) return "a finite number";
-  if (t.empty() || *end || t.find_first_not_of("+-.0123456789eE") != std::string::npos) return "a number";
+  if (t.empty() || *end || !decimalCharacters(t)) return "a number";
   return "";
 }
 
@@ -1162,15 +1162,33 @@ double hydrostaticStretch(double lambda, double mu, double traction, const std::
   return x;
 }
 
-void readMaterial(SceneBuild& b) {
-  const Section m = b.section("Material");
-  MaterialSpec& mat = b.problem.material;
-  mat.dim = b.dim;
+/// A material from a list of materialKeys (the scene's Material, or a block's, whose keys not given
+/// hold the top-level values): the one reader of those keys, so a new material key is read
+/// everywhere a material is.
+MaterialSpec materialFrom(const Section& m, int dim) {
+  MaterialSpec mat;
+  mat.dim = dim;
   mat.kind = m.choice<MaterialKind>("Model");
-  mat.planar = b.dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
+  mat.planar = dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
   mat.E = m.ranged<double>("Young's Modulus");
   mat.nu = m.ranged<double>("Poisson's Ratio");
+  return mat;
 }
+
+/// A damage law from a list of damageLawKeys (Damage, or a block's Damage); `key` names the list in
+/// the message ("'Damage/", "'Blocks/steel/Damage/").
+DamageSpec damageLawFrom(const Section& dm, const std::string& file, const std::string& key) {
+  DamageSpec ds;
+  ds.sCr = dm.get<double>("Critical Stretch");
+  ds.sMin = dm.get<double>("Softening Start");
+  if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
+    fail(file, key + "Softening Start' and " + key + "Critical Stretch' must satisfy 0 < s_min < s_cr");
+  ds.beta = dm.ranged<double>("Beta");
+  ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+  return ds;
+}
+
+void readMaterial(SceneBuild& b) { b.problem.material = materialFrom(b.section("Material"), b.dim); }
 
 /// Discretization/Holes of a lattice.
 std::vector<Hole> readHoles(const Section& dl, int dim) {
@@ -1297,6 +1315,8 @@ void readDiscretization(SceneBuild& b) {
     fail(b.file, "'Discretization/Mesh File' is for Type = Exodus (this scene's Type is " + dtype + ")");
   const bool distributed = dl.get<std::string>("Construction") == "Distributed";
   b.problem.partition = dl.choice<PartitionMethod>("Partition");
+  if (dtype == "Particle File") b.sc.inputFile = b.relativeToScene(dl.get<std::string>("Particle File"));
+  if (dtype == "Exodus") b.sc.inputFile = b.relativeToScene(dl.get<std::string>("Mesh File"));
   try {
     if (distributed) {
       // This rank's share only (problemOnLocalLattice, problemOnLocalParticleFile, an Exodus
@@ -1394,14 +1414,8 @@ void readDamage(SceneBuild& b) {
   Scene& sc = b.sc;
   sc.maxBreakRounds = dm.ranged<int>("Max Break Rounds");
   if (!dm.get<bool>("Enabled")) return;
-  DamageSpec& ds = b.problem.damageSpec;
   b.problem.damage = true;
-  ds.sCr = dm.get<double>("Critical Stretch");
-  ds.sMin = dm.get<double>("Softening Start");
-  if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
-    fail(b.file, "'Damage/Softening Start' and 'Damage/Critical Stretch' must satisfy 0 < s_min < s_cr");
-  ds.beta = dm.ranged<double>("Beta");
-  ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+  b.problem.damageSpec = damageLawFrom(dm, b.file, "'Damage/");
   sc.stallBreak = dm.get<std::string>("On Stall") == "Break Most Stretched";
   sc.stallBreakTolerance = dm.ranged<double>("Stall Break Tolerance");
   sc.maxStallBreaks = dm.ranged<int>("Max Stall Breaks");
@@ -1450,26 +1464,14 @@ void readBlocks(SceneBuild& b) {
       fail(file, "blocks '" + entryOf[id] + "' and '" + name + "' both name block " + std::to_string(id) + "; give each block one entry");
     BlockSpec spec;
     spec.id = id;
-    const Section m = e.sub("Material");
-    spec.material.dim = b.dim;
-    spec.material.kind = m.choice<MaterialKind>("Model");
-    spec.material.planar = b.dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
-    spec.material.E = m.ranged<double>("Young's Modulus");
-    spec.material.nu = m.ranged<double>("Poisson's Ratio");
+    spec.material = materialFrom(e.sub("Material"), b.dim);
     const double G = e.sub("Stabilization").ranged<double>("G");
     if (G > 0 && b.pl.sublist("Model").get<std::string>("Stabilization") != "Silling")
       fail(file, key + "Stabilization/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
     spec.G = G;
     if (G > 0) P.stabilization = true;
     if (P.damage) {
-      const Section dm = e.sub("Damage");
-      DamageSpec ds;
-      ds.sCr = dm.get<double>("Critical Stretch");
-      ds.sMin = dm.get<double>("Softening Start");
-      if (!(ds.sMin > 0 && ds.sCr > ds.sMin))
-        fail(file, key + "Damage/Softening Start' and 'Critical Stretch' must satisfy 0 < s_min < s_cr");
-      ds.beta = dm.ranged<double>("Beta");
-      ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+      const DamageSpec ds = damageLawFrom(e.sub("Damage"), file, key + "Damage/");
       spec.damage = ds;
       const DamageSpec& top = P.damageSpec;
       if (b.sc.stallBreak && (ds.sCr != top.sCr || ds.sMin != top.sMin || ds.beta != top.beta || ds.softening != top.softening))

@@ -95,6 +95,7 @@ struct OutputSettings {
 
 struct Scene {
   std::string file;
+  std::string inputFile;  // the particle file or Exodus mesh read (path as opened); empty for a lattice
   std::string title;
   std::shared_ptr<ProblemSpec> problem;
   std::map<std::string, std::vector<int>> regions;  // global particle ids (distributed: those of the rank's share)
