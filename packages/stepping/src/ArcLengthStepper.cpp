@@ -12,7 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "perinox/model/Model.hpp"  // EvaluationError: the model could not be evaluated at a state
+#include "perinox/core/EvaluationError.hpp"  // the model could not be evaluated at a state
 
 namespace perinox {
 
@@ -353,6 +353,7 @@ void ArcLengthStepper::accept(StepRecord& rec, const NewtonResult& r, const Vec&
       << rec.step - 1 << ", " << opt_.monitorName << " " << monitors_[k - 2] << ") and now decreases";
     note(s.str());
   }
+  if (commit_) commit_(*xConverged_);  // the history of the accepted step, before anyone sees it
   const StepInfo info{rec, r, *xConverged_, lambda_};
   for (auto* o : observers_) o->accepted(info);
 }

@@ -531,6 +531,7 @@ void LoadStepper::accept(const Thyra::VectorBase<double>& x, const StepRecord& r
   } else if (increment < nominal && nr.iterations <= 6) {
     increment = std::min(nominal, 2 * increment);
   }
+  if (commit_) commit_(*xConverged_);  // the history of the accepted step, before anyone sees it
   const StepInfo info{rec, nr, *xConverged_, state_.loadFactor};
   for (auto* o : observers_) o->accepted(info);
 }

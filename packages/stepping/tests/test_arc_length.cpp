@@ -221,7 +221,22 @@ TEST(ArcLengthStepper, LandsOnATargetLoadFactorBeforeThePeak) {
   ArcLengthStepper arc(r.model, r.scale, o);
   PathRecorder rec;
   arc.addObserver(&rec);
+  // The history commit: once per accepted step, with its solution, before the observers see it.
+  std::vector<double> committedX0;
+  std::vector<std::size_t> commitsWhenObserved;
+  struct Seen : StepObserver {
+    std::function<void()> f;
+    void accepted(const StepInfo&) override { f(); }
+  } seen;
+  seen.f = [&] { commitsWhenObserved.push_back(committedX0.size()); };
+  arc.addObserver(&seen);
+  arc.setHistoryCommit([&](const Thyra::VectorBase<double>& x) { committedX0.push_back(x0Of(x)); });
   ASSERT_TRUE(arc.run(*r.zero(), 0.0)) << arc.failure();
+  ASSERT_EQ(committedX0.size(), arc.records().size());
+  for (std::size_t k = 0; k < rec.points.size(); ++k) {
+    EXPECT_EQ(committedX0[k], rec.points[k].x0);
+    EXPECT_EQ(commitsWhenObserved[k], k + 1);
+  }
   EXPECT_NEAR(arc.loadFactor(), 0.25, 0.25e-9);
   // x_0 exp(-x_0) = 0.25 on the rising branch (x_0 < 1), by Newton on the scalar equation.
   double x0 = 0.25;

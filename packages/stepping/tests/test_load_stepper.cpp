@@ -265,6 +265,74 @@ TEST(LoadStepper, AnObserverCanStopTheRunAndTheStateIsTheLastAcceptedOne) {
   EXPECT_LT(maxError(*s.springs, stepper.converged(), 0.5), 1e-11);
 }
 
+// The history commit (HistoryCommit): once per accepted step, with the accepted solution, before
+// the observers see the step; never for a failed attempt, a cut-back, a damage re-equilibration or
+// a vetoed step.
+class CommitLog : public StepObserver {
+ public:
+  std::vector<std::vector<double>> committed;  // x at each commit
+  std::vector<std::size_t> commitsSeen;        // commits made when each accepted step was observed
+  std::vector<std::vector<double>> observed;
+  double vetoAt = 2.0;
+  HistoryCommit commit() {
+    return [this](const Thyra::VectorBase<double>& x) { committed.push_back(values(x)); };
+  }
+  std::string vet(const StepInfo& s, double) override {
+    return s.loadFactor >= vetoAt - 1e-12 ? "vetoed" : "";
+  }
+  void accepted(const StepInfo& s) override {
+    commitsSeen.push_back(committed.size());
+    observed.push_back(values(s.x));
+  }
+  static std::vector<double> values(const Thyra::VectorBase<double>& x) {
+    Thyra::ConstDetachedVectorView<double> v(x);
+    return std::vector<double>(v.values(), v.values() + v.subDim());
+  }
+};
+
+TEST(LoadStepper, CommitsTheHistoryOfEachAcceptedStepOnceBeforeItsObservers) {
+  // Cut-backs: the failed full step and its failed halvings commit nothing.
+  Rig s({1.0, 1.0}, 1.0, {20.0, 15.0}, 7);
+  LoadStepperOptions o;
+  o.loadSteps = 1;
+  o.predictor = false;
+  LoadStepper stepper(s.model, s.solve(), o);
+  CommitLog log;
+  stepper.setHistoryCommit(log.commit());
+  stepper.addObserver(&log);
+  ASSERT_TRUE(stepper.run()) << stepper.failure();
+  ASSERT_GT(stepper.records().front().cutbacks, 0);
+  ASSERT_EQ(log.committed.size(), stepper.records().size());
+  EXPECT_EQ(log.committed, log.observed);  // the accepted solution, as the observers see it
+  for (std::size_t k = 0; k < log.commitsSeen.size(); ++k) EXPECT_EQ(log.commitsSeen[k], k + 1);
+  // Damage: the re-equilibrations after a break are part of one accepted step, one commit.
+  Rig d({1.0, 4.0, 1.5}, 0.2, {1.5, 1.0, 1.5});
+  Softening policy(*d.springs, 0.6);
+  o = LoadStepperOptions{};
+  o.loadSteps = 5;
+  LoadStepper damaged(d.model, d.solve(), o);
+  damaged.setDamagePolicy(&policy);
+  CommitLog dlog;
+  damaged.setHistoryCommit(dlog.commit());
+  damaged.addObserver(&dlog);
+  ASSERT_TRUE(damaged.run()) << damaged.failure();
+  int rounds = 0;
+  for (const auto& r : damaged.records()) rounds += r.breakRounds;
+  ASSERT_GE(rounds, 1);
+  EXPECT_EQ(dlog.committed.size(), 5u);
+  EXPECT_EQ(dlog.committed, dlog.observed);
+  // A vetoed step is not committed: the history stays that of the last accepted step.
+  Rig v({1.0, 2.0}, 0.5, {1.0, 1.0});
+  LoadStepper vetoed(v.model, v.solve(), o);
+  CommitLog vlog;
+  vlog.vetoAt = 0.6;
+  vetoed.setHistoryCommit(vlog.commit());
+  vetoed.addObserver(&vlog);
+  EXPECT_FALSE(vetoed.run());
+  ASSERT_EQ(vlog.committed.size(), 2u);  // load factors 0.2 and 0.4
+  EXPECT_EQ(vlog.committed.back(), CommitLog::values(vetoed.converged()));
+}
+
 TEST(LoadStepper, OptionsAreValidatedWithOneSentence) {
   Teuchos::ParameterList good;
   good.set("Load Steps", 8);

@@ -18,21 +18,10 @@
 #include <string>
 #include <vector>
 
+#include "perinox/core/EvaluationError.hpp"  // what the model throws at a state it cannot evaluate
 #include "perinox/material/Material.hpp"
 
 namespace perinox {
-
-/// Thrown when the model cannot be evaluated at a configuration (inverted or non-finite F,
-/// singular shape tensor). The message names the particle and the field.
-class EvaluationError : public std::runtime_error {
- public:
-  EvaluationError(const std::string& what, long long particle)
-      : std::runtime_error(what), particle_(particle) {}
-  long long particle() const { return particle_; }
-
- private:
-  long long particle_;
-};
 
 /// What one rank sees of the discretisation. Local ids: [0, numOwned) are owned particles,
 /// [numOwned, size) ghosts (family members of owned particles owned elsewhere).

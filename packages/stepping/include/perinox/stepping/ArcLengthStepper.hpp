@@ -104,6 +104,8 @@ class ArcLengthStepper {
   /// Counts the tangent's negative pivots at every converged point (StepRecord::negativePivots).
   void setStabilityCount(std::function<int(const Thyra::VectorBase<double>&)> count) { stability_ = std::move(count); }
   /// Observers see every accepted step (and notes: cut-backs, landing on the target, limit points).
+  /// The model's history commit, called once per accepted step before the observers (HistoryCommit).
+  void setHistoryCommit(HistoryCommit commit) { commit_ = std::move(commit); }
   void addObserver(StepObserver* observer) { observers_.push_back(observer); }
   /// Follows the path from the equilibrium (x0, lambda0) until the target is reached (true) or a
   /// step fails for good (false, failure() says why).
@@ -134,6 +136,7 @@ class ArcLengthStepper {
   ArcLengthCorrector corrector_;
   std::function<double(const Thyra::VectorBase<double>&)> monitor_;
   std::function<int(const Thyra::VectorBase<double>&)> stability_;
+  HistoryCommit commit_;
   std::vector<StepObserver*> observers_;
   std::vector<StepRecord> records_;
   std::vector<double> path_, monitors_, lambdas_;

@@ -164,6 +164,16 @@ class ValueRecorder final : public StepObserver {
   std::vector<std::pair<double, std::vector<double>>> values_;
 };
 
+/// How a stepper commits a model's history (the internal variables of materials with history, such
+/// as plastic strain). The model's residual, tangent and J v at x are pure functions of x and its
+/// committed state: every evaluation (Newton iterations, line searches, J v products, cut-backs,
+/// re-equilibrations after bond breaks) computes a trial state from the committed one and never
+/// writes it back. The stepper calls this once per accepted step, with the accepted solution at the
+/// model's load factor: after the step's solve and its damage re-equilibrations converged and the
+/// observers' veto passed, before the observers see the step. A failed, cut back or vetoed step
+/// commits nothing. A host that drives the model itself commits through the same call. Collective.
+using HistoryCommit = std::function<void(const Thyra::VectorBase<double>& x)>;
+
 /// The stepper's own state, for checkpoints and restarts.
 struct StepperState {
   int step = 0;
@@ -184,6 +194,8 @@ class LoadStepper {
               const LoadStepperOptions& options);
   void setReequilibrationSolve(std::function<NewtonResult(Thyra::VectorBase<double>&)> solve) { reequilibrate_ = std::move(solve); }
   void setDamagePolicy(DamagePolicy* policy) { damage_ = policy; }
+  /// The model's history commit (HistoryCommit), for a model whose materials have history.
+  void setHistoryCommit(HistoryCommit commit) { commit_ = std::move(commit); }
   void addObserver(StepObserver* observer) { observers_.push_back(observer); }
   /// Start from a checkpoint's state instead of lambda = 0 (the records and path of the steps so
   /// far, the converged state and the one before it).
@@ -230,6 +242,7 @@ class LoadStepper {
   std::function<NewtonResult(Thyra::VectorBase<double>&)> solve_, reequilibrate_;
   LoadStepperOptions options_;
   DamagePolicy* damage_ = nullptr;
+  HistoryCommit commit_;
   std::vector<StepObserver*> observers_;
   StepperState state_;
   std::vector<StepRecord> records_;
