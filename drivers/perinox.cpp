@@ -4,19 +4,22 @@
 //   perinox run xml/cantilever.xml
 //   perinox run xml/cantilever.xml --set Discretization/Horizon\ Factor=2.015 --output out/c2
 //   mpirun -np 2 perinox run xml/hydrostatic.xml
-//   perinox schema            (every scene key with its default and meaning)
+//   perinox schema [--json]   (every scene key with its default and meaning; --json: for programs, with allowed values)
 //
 // Exit codes: 0 converged; 2 invalid input (nothing written); 3 a load step failed for good
 // (the last converged state is written, with the reason in summary.json); 1 internal error.
 #include <Teuchos_DefaultComm.hpp>
 #include <Tpetra_Core.hpp>
 #include <mpi.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "Simulation.hpp"
 #include "perinox/io/OutputFolder.hpp"
@@ -29,7 +32,7 @@ int usage(int code) {
       << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
          "                  [--checkpoint-steps N] [--checkpoint-seconds S] [--checkpoint-dir DIR]\n"
          "                  [--restart CHECKPOINT_DIR]\n"
-         "       perinox schema     every scene key with its default and meaning\n"
+         "       perinox schema     every scene key with its default and meaning (--json: as JSON, with allowed values)\n"
          "       perinox --help\n"
          "checkpoints (load stepping): after a converged step, every N steps and/or S seconds, into\n"
          "DIR (default: the output folder + .checkpoint), each replacing the last when complete;\n"
@@ -180,6 +183,35 @@ int runAndWrite(const perinox::Scene& scene, const RunCommand& cmd, const Teucho
   }
 }
 
+/// The scene schema as JSON, for programs (the fuzzers, documentation tables): one object per key,
+/// "Sublist/Key" (a named sublist's template as "*": "Regions/*/Type") -> type, default, doc and,
+/// for an enumerated key, its values. The presets are the files of xml/solvers and "custom".
+nlohmann::json schemaJson(const Teuchos::ParameterList& list, const std::string& prefix, const std::string& presetDir) {
+  nlohmann::json out = nlohmann::json::object();
+  for (auto it = list.begin(); it != list.end(); ++it) {
+    const std::string name = list.name(it) == "<name>" ? "*" : list.name(it);
+    const Teuchos::ParameterEntry& e = list.entry(it);
+    if (e.isList()) {
+      out.update(schemaJson(Teuchos::getValue<Teuchos::ParameterList>(e), prefix + name + "/", presetDir));
+      continue;
+    }
+    nlohmann::json k = {{"type", e.getAny(false).typeName()}, {"default", Teuchos::toString(e.getAny(false))},
+                        {"doc", e.docString()}};
+    if (e.validator() != Teuchos::null && e.validator()->validStringValues() != Teuchos::null)
+      k["values"] = std::vector<std::string>(e.validator()->validStringValues()->begin(), e.validator()->validStringValues()->end());
+    out[prefix + name] = k;
+  }
+  if (prefix.empty() && out.contains("Solver/Linear Solver Preset")) {
+    std::vector<std::string> presets{"custom"};
+    std::error_code ec;
+    for (const auto& f : std::filesystem::directory_iterator(presetDir, ec))
+      if (f.path().extension() == ".xml") presets.push_back(f.path().stem().string());
+    std::sort(presets.begin(), presets.end());
+    out["Solver/Linear Solver Preset"]["values"] = presets;
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -195,7 +227,13 @@ int main(int argc, char** argv) {
   const std::string usageLine = "usage: perinox run SCENE.xml [options] (perinox --help lists them)";
   if (args.empty()) return refuse("no command given; " + usageLine);
   if (args[0] == "schema") {
-    if (root) perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
+    if (args.size() > 2 || (args.size() == 2 && args[1] != "--json"))
+      return refuse("usage: perinox schema [--json]");
+    if (!root) return 0;
+    if (args.size() == 2)
+      std::cout << schemaJson(*perinox::sceneSchema(), "", xmlDirectory() + "/solvers").dump(1) << "\n";
+    else
+      perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
     return 0;
   }
   if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; " + usageLine);

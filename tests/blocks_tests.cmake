@@ -47,7 +47,7 @@ perinox_bad_input(blocks_box_overlap ${PATCH} "block boxes must not overlap"
   --set "Blocks/extra/Id=3" --set "Blocks/extra/Box Min={0, 0}" --set "Blocks/extra/Box Max={0.5, 0.3}")
 perinox_bad_input(blocks_G_without_stabilization ${PATCH}
   "'Blocks/upper/Stabilization/G' is set but 'Model/Stabilization' is None" --set "Model/Stabilization=None" --set "Model/G=0")
-perinox_bad_input(blocks_damage_order ${PATCH} "'Blocks/upper/Damage/Softening Start' and 'Critical Stretch' must satisfy 0 < s_min < s_cr"
+perinox_bad_input(blocks_damage_order ${PATCH} "'Blocks/upper/Damage/Softening Start' and 'Blocks/upper/Damage/Critical Stretch' must satisfy 0 < s_min < s_cr"
   --set "Damage/Enabled=true" --set "Blocks/upper/Damage/Critical Stretch=0.001")
 perinox_bad_input(blocks_damage_stall ${PATCH} "compares raw stretches across blocks"
   --set "Damage/Enabled=true" --set "Damage/On Stall=Break Most Stretched" --set "Blocks/upper/Damage/Critical Stretch=0.01")

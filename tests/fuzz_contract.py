@@ -84,23 +84,9 @@ TEMPLATE_KEYS = {
     "Probes": ("Region", "Quantity"),
     "Holes": ("Shape", "Center", "Radius", "Half Widths"),
 }
-SIDES = ("xmin", "xmax", "ymin", "ymax", "zmin", "zmax")
-ENUMS = {
-    "Material/Model": ("Hencky", "Small Strain"),
-    "Material/Plane": ("Plane Strain", "Plane Stress"),
-    "Model/Zero-Energy Control": ("None", "Springs", "Average Displacement", "Stress Points"),
-    "Model/Stabilization": ("None", "Silling"),
-    "Regions/*/Type": ("Box", "Side Layer", "Fictitious Side", "Nearest", "All Fictitious", "All Real"),
-    "Regions/*/Side": SIDES,
-    "Regions/*/Population": ("Real", "Fictitious", "All"),
-    "Boundary Conditions/*/Component": ("x", "y", "z", "all"),
-    "Loads/*/Type": ("Total Force", "Traction", "Body Force"),
-    "Probes/*/Quantity": ("Displacement", "Reaction", "Profile"),
-    "Reference/Type": ("None", "Hydrostatic Hencky", "Uniform Stretch", "Affine", "Seed001 Bar"),
-    "Solver/Linear Solver Preset": ("direct", "mumps", "gmres-ilu", "gmres-ilu0", "gmres-muelu", "cg-ilu",
-                                    "mf-ilu", "mf-assembled-ilu", "mf-muelu", "jfnk-ilu", "scalable", "custom"),
-    "Discretization/Fictitious Sides": SIDES,
-}
+# Enumerated keys and their allowed values ("Regions/*/Type" -> values), read from
+# `perinox schema --json` at start-up (read_enums): the scene schema is their one home.
+ENUMS = {}
 REFUSE, ANY, OK = "refuse", "any", "ok"
 ABSOLUTE = "(the scene's absolute path)"
 
@@ -1604,6 +1590,16 @@ def read_schema(runner):
     return {k: v for k, v in schema.items() if not k.startswith("Solver/Linear Solver/")}
 
 
+def read_enums(runner):
+    """The allowed values of every enumerated key, from `perinox schema --json`."""
+    env = dict(runner.env, **runner.fast)
+    proc = subprocess.run([runner.perinox, "schema", "--json"], env=env, capture_output=True, timeout=120)
+    if proc.returncode != 0:
+        raise RuntimeError(f"perinox schema --json exited {proc.returncode}: {proc.stderr.decode(errors='replace')[-300:]}")
+    keys = json.loads(proc.stdout.decode("utf-8"))
+    return {k: tuple(v["values"]) for k, v in keys.items() if "values" in v}
+
+
 def command_line(r):
     return f"cd {shlex.quote(r.case_dir)} && " + shown(shlex.join(r.command))
 
@@ -1696,7 +1692,8 @@ def main():
     runner = Runner(args)
     try:
         schema = read_schema(runner)
-    except (RuntimeError, OSError, subprocess.TimeoutExpired) as e:
+        ENUMS.update(read_enums(runner))
+    except (RuntimeError, OSError, subprocess.TimeoutExpired, ValueError, KeyError) as e:
         print(f"fuzz_contract.py: cannot read the scene schema from {runner.perinox}: {e}", file=sys.stderr)
         return 2
 
