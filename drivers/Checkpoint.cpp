@@ -233,7 +233,10 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     if (state.at("lambda").get<double>() != recorded)
       throw std::runtime_error("'lambda' = " + state.at("lambda").dump() + " is not the load factor " + std::to_string(recorded) +
                                " of its last step record");
-    (void)state.at("path_load_factors").get<std::vector<double>>();
+    std::vector<double> recordedPath;
+    for (const auto& sj : state.at("steps")) recordedPath.push_back(sj.at("load_factor").get<double>());
+    if (state.at("path_load_factors").get<std::vector<double>>() != recordedPath)
+      throw std::runtime_error("'path_load_factors' does not list the load factors of its step records");
     if (!scene.problem->damage && !state.at("detached").empty())
       throw std::runtime_error("it lists detached particles, but the scene has no damage");
     for (long long id : state.at("detached").get<std::vector<long long>>())
@@ -242,7 +245,14 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
                                  std::to_string(particles) + " particles");
     const auto& probes = state.at("probes");
     if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
-    for (const auto& p : probes) (void)p.get<std::vector<std::pair<double, std::vector<double>>>>();
+    for (const auto& p : probes) {
+      // A probe's history has a value per accepted step, at its load factor (or none: a profile).
+      const auto history = p.get<std::vector<std::pair<double, std::vector<double>>>>();
+      if (!history.empty() && (history.size() != recordedPath.size() ||
+                               !std::equal(history.begin(), history.end(), recordedPath.begin(),
+                                           [](const auto& h, double l) { return h.first == l; })))
+        throw std::runtime_error("a probe history does not follow the step records");
+    }
   } catch (const std::exception& e) {
     // nlohmann's sentences start with their own tag ("[json.exception.type_error.302] "): cut it.
     std::string why = e.what();

@@ -15,6 +15,8 @@ perinox_bad_mesh_distributed(distributed_exodus_long_type bar_exodus.xml "long_t
   --set "${MF}=long_type_5000.e")
 perinox_bad_mesh(exodus_duplicate_element bar_exodus.xml "particles 0 and 16 coincide" --set "${MF}=duplicate_element.e"
   --set "Regions/second half/Name=left part")
+perinox_bad_mesh(exodus_spheres_one_node bar_exodus.xml "particles 1 and 45 coincide" --set "${MF}=spheres_one_node.e"
+  --set "Regions/right/Type=Node Set" --set "Regions/right/Id=-1" --set "Regions/right/Name=right" --set "Regions/second half/Name=balls")
 perinox_bad_mesh(exodus_negative_block bar_exodus.xml "negative_block.e: has element block id -3 (block ids must be 0 or more" --set "${MF}=negative_block.e")
 # An element far from the others has no neighbour: one sentence on every rank count, either
 # construction.

@@ -7,7 +7,7 @@ The two-block bar of tests/exodus/bar_exodus.xml (an undamaged scene, here in th
 is copied with its mesh bar.e into WORK, run with a checkpoint every second step (so the one
 after step 2, at load factor 2/3, is kept), and then resumed from damaged
 or mismatched checkpoints. Each resume must be refused with exit 2, one stderr line holding the
-expected words, and no output folder:
+expected words and no C++ or JSON library internals, and no output folder:
 
   * the mesh replaced by another with the same counts (bar_scaled.e: the same 16 x 4 x 4 hexahedra,
     edge 0.26 instead of 0.25): "is not the file it was written with";
@@ -70,7 +70,8 @@ def expect(name, words, edit):
     edit(ck)
     out = os.path.join(a.work, name)
     code, err = run("--output", out, "--restart", ck)
-    ok = (code == 2 and len(err) == 1 and words in err[0] and not os.path.exists(out)) if words else code == 0
+    internals = [w for w in ("json.exception", "std::", "ProblemSpec::", "basic_string", "what():") if err and w in err[0]]
+    ok = (code == 2 and len(err) == 1 and words in err[0] and not internals and not os.path.exists(out)) if words else code == 0
     if ok:
         passed += 1
         print(f"ok   {name}: {err[0] if err else 'resumed'}")

@@ -109,6 +109,18 @@ int main(int argc, char** argv) {
       conn.insert(conn.end(), conn.begin(), conn.begin() + 8);  // element 1 again, as the last one
       exotest::write(dir + "/duplicate_element.e", m);
     }
+    {  // a sphere mesh whose second and fourth elements sit on one node
+      exotest::Mesh m = exotest::hexBox(4, 2, 2, 0.25, 9);
+      exotest::Mesh balls;
+      balls.nodes = m.nodes;
+      balls.nodeSets = m.nodeSets;
+      std::vector<int> conn;
+      std::vector<double> attr;
+      for (int n = 1; n <= static_cast<int>(m.nodes.size()); ++n) conn.push_back(n), attr.push_back(0.1), attr.push_back(0.25 * 0.25 * 0.25);
+      conn.push_back(2), attr.push_back(0.1), attr.push_back(0.25 * 0.25 * 0.25);
+      balls.blocks = {{1, "SPHERE", 1, conn, "balls", 2, attr}};
+      exotest::write(dir + "/spheres_one_node.e", balls);
+    }
     {
       exotest::Mesh m = exotest::hexBox(4, 2, 2, 0.25, 2);
       m.blocks[1].id = -3;
