@@ -43,5 +43,59 @@ function(perinox_add_gtest)
     endif()
     set_tests_properties(${tname} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}"
       LABELS "${labels}" PROCESSORS ${np} TIMEOUT ${T_TIMEOUT})
+    perinox_unit_test(${tname})
+  endforeach()
+endfunction()
+
+# Labels say what a test is (docs/testing.md). `unit` is kept only by the tests named here: the
+# gtest programs of the packages (perinox_add_gtest names its own) and tools' tests that run no
+# perinox driver and need no test that does. perinox_finalize_labels() runs last and takes `unit`
+# from every other test; one left without a label then gets `driver` (it runs the driver, or
+# compares what driver runs wrote).
+function(perinox_unit_test)
+  set_property(GLOBAL APPEND PROPERTY PERINOX_UNIT_TESTS ${ARGN})
+endfunction()
+
+# `quick`: a subset that exercises every package in a few minutes (docs/testing.md lists it and
+# its time), for a developer's loop; the whole suite stays the README's test command and CI's.
+function(perinox_quick_tests)
+  set_property(GLOBAL APPEND PROPERTY PERINOX_QUICK_TESTS ${ARGN})
+endfunction()
+
+# Called at the end of each CMakeLists.txt that adds tests (get_test_property sees only the current
+# directory's tests in this CMake).
+function(perinox_finalize_labels)
+  get_property(unit GLOBAL PROPERTY PERINOX_UNIT_TESTS)
+  get_property(quick GLOBAL PROPERTY PERINOX_QUICK_TESTS)
+  get_property(tests DIRECTORY PROPERTY TESTS)
+  foreach(t ${tests})
+    get_test_property(${t} LABELS labels)
+    if(NOT labels)
+      set(labels "")
+    endif()
+    if(NOT t IN_LIST unit)
+      list(REMOVE_ITEM labels unit)
+      if(NOT labels)
+        set(labels driver)
+      endif()
+    elseif(NOT "unit" IN_LIST labels)
+      list(APPEND labels unit)
+    endif()
+    if(t IN_LIST quick)
+      list(APPEND labels quick)
+    endif()
+    set_tests_properties(${t} PROPERTIES LABELS "${labels}")
+  endforeach()
+  set_property(GLOBAL APPEND PROPERTY PERINOX_LABELLED_TESTS ${tests})
+endfunction()
+
+# At the top level, after every directory: each name given to perinox_quick_tests is a test.
+function(perinox_check_quick_tests)
+  get_property(quick GLOBAL PROPERTY PERINOX_QUICK_TESTS)
+  get_property(all GLOBAL PROPERTY PERINOX_LABELLED_TESTS)
+  foreach(t ${quick})
+    if(NOT t IN_LIST all)
+      message(FATAL_ERROR "perinox_quick_tests names '${t}', which is no test")
+    endif()
   endforeach()
 endfunction()

@@ -34,6 +34,7 @@ endforeach()
 set(PF_DIR ${PERINOX_TEST_OUT}/bad_particle_files)
 add_test(NAME bad_particle_files_setup COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/bad_input/make_bad_particle_files.py ${PF_DIR})
 set_tests_properties(bad_particle_files_setup PROPERTIES LABELS "unit;badinput" FIXTURES_SETUP bad_particle_files)
+perinox_unit_test(bad_particle_files_setup)
 set(PF_SCENE ${CMAKE_CURRENT_SOURCE_DIR}/scenes/tension_block_file.xml)
 set(PF "Discretization/Particle File")
 foreach(case "stray;particle 220 has a singular shape tensor"

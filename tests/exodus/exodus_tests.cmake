@@ -29,6 +29,8 @@ perinox_link_exodus(make_exodus_meshes)
 target_include_directories(make_exodus_meshes PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
 add_test(NAME exodus_meshes_setup COMMAND make_exodus_meshes ${EXO_DIR})
 set_tests_properties(exodus_meshes_setup PROPERTIES FIXTURES_SETUP exodus_meshes LABELS unit)
+perinox_unit_test(exodus_meshes_setup tools_peridigm_to_scene tools_peridigm_two_materials tools_peridigm_bad_deck
+                  tools_peridigm_scene_values)  # the mesh writer and the converter: no driver
 
 # perinox_exodus_run(NAME <name> SCENE <scene in EXO_DIR> NP <n> [SETS ...]): the driver on a
 # test scene, which must converge; a fixture <name> for the comparisons.

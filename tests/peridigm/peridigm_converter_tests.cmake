@@ -20,3 +20,4 @@ endif()
 add_test(NAME tools_peridigm_converter
   COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/peridigm/test_peridigm_converter.py ${pd_converter_args})
 set_tests_properties(tools_peridigm_converter PROPERTIES LABELS "unit;badinput" TIMEOUT 300)
+perinox_unit_test(tools_peridigm_converter)
