@@ -51,3 +51,7 @@ perinox_bad_input(blocks_damage_order ${PATCH} "'Blocks/upper/Damage/Softening S
   --set "Damage/Enabled=true" --set "Blocks/upper/Damage/Critical Stretch=0.001")
 perinox_bad_input(blocks_damage_stall ${PATCH} "compares raw stretches across blocks"
   --set "Damage/Enabled=true" --set "Damage/On Stall=Break Most Stretched" --set "Blocks/upper/Damage/Critical Stretch=0.01")
+# A modulus so large that the stabilisation's micromodulus overflows: one sentence naming the block
+# (found by fuzz_inputs; it named a C++ function before).
+perinox_bad_input(blocks_modulus_overflow ${CMAKE_CURRENT_SOURCE_DIR}/scenes/bimaterial_bar.xml
+  "the stabilisation's micromodulus C of block 2 is not finite" --set "Blocks/stiff/Material/Young's Modulus=1e308")

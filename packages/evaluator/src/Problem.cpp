@@ -261,6 +261,15 @@ void validateProblem(const ProblemSpec& P) {
     positive(s.beta, "damageSpec.beta");
   }
   if (!P.blocks.empty()) validateBlocks(P);
+  if (P.stabilization) {  // the micromodulus derived from E, the horizon and the thickness must be a number
+    auto finiteC = [&](const StabilizationSpec& st, const MaterialSpec& m, const std::string& whose) {
+      if (!std::isfinite(st.C))
+        refuse("the stabilisation's micromodulus C of " + whose + " is not finite (Young's modulus " + number(m.E) +
+               " with the horizon " + number(P.disc.horizon) + "): the modulus is too large for these units");
+    };
+    if (P.blocks.empty()) finiteC(P.stabilizationSpec(), P.material, "the material");
+    for (const BlockSpec& b : P.blocks) finiteC(P.stabilizationSpec(b), b.material, "block " + std::to_string(b.id));
+  }
   if (!std::isfinite(P.rotation.angle) || !P.rotation.center.allFinite() || !P.rotation.axis.allFinite())
     refuse("rotation has a non-finite angle, centre or axis");
   if (P.rotates() && std::abs(P.rotation.axis.norm() - 1.0) > 1e-9) refuse("rotation.axis must be a unit vector");
