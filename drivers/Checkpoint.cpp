@@ -221,20 +221,19 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
                                state.at("step").dump());
     // The records are steps 1, 2, ... and the state's load factor is the last one's: a state.json
     // whose counters and records disagree was not written by a run.
-    double recorded = 0;
-    long long number = 0;
+    std::vector<double> recordedPath;  // the records' load factors
     for (const auto& sj : state.at("steps")) {
       const StepRecord r = stepFromJson(sj);
-      if (r.step != ++number) throw std::runtime_error("step record " + std::to_string(number) + " says step " + std::to_string(r.step));
+      if (r.step != static_cast<int>(recordedPath.size()) + 1)
+        throw std::runtime_error("step record " + std::to_string(recordedPath.size() + 1) + " says step " + std::to_string(r.step));
       if (!(r.loadFactor >= -1.0 && r.loadFactor <= 1.0))
         throw std::runtime_error("step " + std::to_string(r.step) + " records the load factor " + sj.at("load_factor").dump());
-      recorded = r.loadFactor;
+      recordedPath.push_back(r.loadFactor);
     }
+    const double recorded = recordedPath.empty() ? 0.0 : recordedPath.back();
     if (state.at("lambda").get<double>() != recorded)
       throw std::runtime_error("'lambda' = " + state.at("lambda").dump() + " is not the load factor " + std::to_string(recorded) +
                                " of its last step record");
-    std::vector<double> recordedPath;
-    for (const auto& sj : state.at("steps")) recordedPath.push_back(sj.at("load_factor").get<double>());
     if (state.at("path_load_factors").get<std::vector<double>>() != recordedPath)
       throw std::runtime_error("'path_load_factors' does not list the load factors of its step records");
     if (!scene.problem->damage && !state.at("detached").empty())

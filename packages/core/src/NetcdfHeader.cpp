@@ -15,6 +15,7 @@
 // CDF-1, 8 in CDF-2 and CDF-5.
 #include "NetcdfHeader.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <limits>

@@ -12,9 +12,9 @@ namespace perinox {
 /// one). Checked before opening: opening a FIFO waits for a writer, and a folder or a device
 /// would be read as garbage. `kind` names the file in the sentence ("particle file").
 inline void requireRegularFile(const std::string& path, const std::string& kind) {
+  if (path.empty()) throw std::runtime_error("the " + kind + " path is empty");
   std::error_code ec;
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (path.empty()) throw std::runtime_error("the " + kind + " path is empty");
   if (ec || !std::filesystem::exists(st))
     throw std::runtime_error(path + ": cannot open the " + kind + " for reading (no such file, or not readable)");
   if (std::filesystem::is_directory(st)) throw std::runtime_error(path + ": is a folder, not a " + kind);
