@@ -101,6 +101,17 @@ inline void setElementType(const std::string& path, int position, const std::str
   if (!ok) throw std::runtime_error("setElementType: cannot write the element type of " + path);
 }
 
+/// Replaces the title of a written mesh by `title`, of any length, through netCDF (the Exodus
+/// writer keeps at most 80 characters).
+inline void setTitle(const std::string& path, const std::string& title) {
+  int nc = -1;
+  if (nc_open(path.c_str(), NC_WRITE, &nc) != NC_NOERR) throw std::runtime_error("setTitle: cannot open " + path);
+  const bool ok = nc_redef(nc) == NC_NOERR && nc_put_att_text(nc, NC_GLOBAL, "title", title.size() + 1, title.c_str()) == NC_NOERR &&
+                  nc_enddef(nc) == NC_NOERR;
+  nc_close(nc);
+  if (!ok) throw std::runtime_error("setTitle: cannot write the title of " + path);
+}
+
 /// A box of nx x ny x nz hexahedra of edge h from the origin; node (i, j, k) is number
 /// 1 + i + (nx+1) (j + (ny+1) k); element (i, j, k) is 1 + i + nx (j + ny k) within the
 /// blocks, which split it at x = splitAt elements (block 1 below, block 2 above; splitAt >= nx:

@@ -7,8 +7,8 @@
 //   fuzz_readers DIR [--seed S] [--cases N]
 //
 // Exodus cases start from the meshes of tests/exodus/ExodusTestMeshes.hpp and change one thing:
-// an element type, block or set name of random length (up to 6 000 characters) and bytes, a
-// title, random bytes of the file overwritten, the file cut short or extended with garbage,
+// an element type, block or set name or the title, of random length (up to 6 000 characters)
+// and bytes, random bytes of the file overwritten, the file cut short or extended with garbage,
 // node numbers out of range, huge coordinates. Particle-file cases change one line: long
 // tokens, NUL and control bytes, hexadecimal, nan and inf, overflowing numbers, too many or too
 // few columns, invalid UTF-8. Case K of seed S is always the same case. Prints a tally and
@@ -72,7 +72,7 @@ void spill(const std::string& path, const std::vector<char>& bytes) {
 /// Writes one damaged mesh; returns what was done to it.
 std::string exodusCase(Rng& rng, const std::string& path, int& dim) {
   exotest::Mesh m = baseMesh(rng, dim);
-  const int kind = std::uniform_int_distribution<int>(0, 7)(rng);
+  const int kind = std::uniform_int_distribution<int>(0, 8)(rng);
   std::string what;
   switch (kind) {
     case 0: what = "element type of " + std::to_string(randomLength(rng)) + " bytes"; break;  // after writing
@@ -96,6 +96,7 @@ std::string exodusCase(Rng& rng, const std::string& path, int& dim) {
         if (rng() % 3 == 0) x[rng() % 3] = (rng() % 2 ? 1 : -1) * std::ldexp(1.0, 900 + static_cast<int>(rng() % 123));
       what = "huge coordinates";
       break;
+    case 8: what = "title of " + std::to_string(randomLength(rng)) + " bytes"; break;  // after writing
     default: what = "bytes"; break;
   }
   try {
@@ -112,6 +113,11 @@ std::string exodusCase(Rng& rng, const std::string& path, int& dim) {
     exotest::setElementType(path, 1, type);
     what = "exodus: element type of " + std::to_string(n) + " bytes";
     return what;
+  }
+  if (kind == 8) {
+    const std::size_t n = std::stoul(what.substr(what.find("of ") + 3));
+    exotest::setTitle(path, randomText(rng, n, rng() % 2));
+    return "exodus: " + what;
   }
   if (kind >= 5) {
     std::vector<char> bytes = slurp(path);
