@@ -42,8 +42,8 @@ double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref
       ur[c] = ref.displacement(d.X[p], c);
       u[c] = uOwned[l * D + c];
     }
-    if (ur.norm() <= 1e-14 * d.dx) continue;
-    s[0] += (u - ur).norm() / ur.norm() * d.volume[p];
+    if (ur.stableNorm() <= 1e-14 * d.dx) continue;
+    s[0] += (u - ur).stableNorm() / ur.stableNorm() * d.volume[p];  // stable: no overflow of the squares
     s[1] += d.volume[p];
   }
   Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, 2, s, g);

@@ -168,7 +168,7 @@ perinox_bad_input(spacing_too_small ${TINY} "'Discretization/Spacing' = 1e-300 g
   --set "Discretization/Particles={}" --set "Discretization/Spacing=1e-300")
 perinox_bad_input(spacing_not_dividing ${TINY} "'Discretization/Spacing' = 0.07 does not divide the box along x"
   --set "Discretization/Particles={}" --set "Discretization/Spacing=0.07")
-perinox_bad_input(reference_stretch_negative ${TINY} "'Reference/Stretch' must be positive"
+perinox_bad_input(reference_stretch_negative ${TINY} "'Reference/Stretch' must be in [0.01, 100], not"
   --set "Reference/Type=Uniform Stretch" --set "Reference/Stretch=-1")
 perinox_bad_sets(${XML}/tension_block.xml
   region_negative_thickness "'Regions/right end/Thickness' must be >= 0" "Regions/right end/Thickness=-1")
@@ -208,3 +208,9 @@ perinox_bad_input_distributed(distributed_particle_file_nul 3 ${GEN}/particle_fi
 perinox_bad_input_distributed(distributed_particle_file_late 3 ${GEN}/particle_file_late_garbage.xml
   "late_garbage_particles.txt:200: '1.0x' is not a number")
 perinox_bad_input(particle_file_late ${GEN}/particle_file_late_garbage.xml "late_garbage_particles.txt:200: '1.0x' is not a number")
+# Finite but absurd magnitudes where a key has a physical range (the runs converged and printed
+# e_u = -nan): one sentence naming the key and the range.
+perinox_bad_input(reference_stretch_huge ${TINY} "'Reference/Stretch' must be in [0.01, 100], not"
+  --set "Reference/Type=Uniform Stretch" --set "Reference/Stretch=1e300")
+perinox_bad_input(field_beta_huge ${PROJECT_SOURCE_DIR}/xml/bar1d_variable_modulus.xml "'Material/Field Beta' must be in (0, 1], not 1e+300 (a strain)"
+  --set "Material/Field Beta=1e300")

@@ -393,8 +393,9 @@ void materialSchema(ParameterList& m) {
   materialKeys(m);
   setChoice(m, "Modulus Field", "Uniform",
             {{"Uniform", ""}, {"Seed001 Bar", "E(x) of seed 001 eq. 18: E on the left half, softer to the right"}});
-  setNumber(m, "Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20", positive());
-  setNumber(m, "Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)", positive());
+  setNumber(m, "Field Alpha", 0.001, "Seed001 Bar: alpha of eqs 18-20", reals(End::Open, 0, 1, End::Closed, "a strain"));
+  setNumber(m, "Field Beta", 0.0056568542494923801, "Seed001 Bar: beta of eqs 18-20 (default 0.004 sqrt 2)",
+            reals(End::Open, 0, 1, End::Closed, "a strain"));
   setNumber(m, "Field Length", 1.0, "Seed001 Bar: L_tot (x measured from 0)", positive());
 }
 
@@ -447,7 +448,7 @@ void referenceSchema(ParameterList& r) {
              {"Seed001 Bar", "eq. 19 with the Material's field parameters"}});
   setVector(r, refp, "Gradient", arr<double>({}), "Affine: displacement gradient H, row-major (u = H (X - Center))", Length::DimSquaredOrEmpty);
   r.set("Traction", 0.0, "Hydrostatic Hencky: nominal traction P11 on every side");
-  setNumber(r, "Stretch", 1.0, "Uniform Stretch: l / l0", positive());
+  setNumber(r, "Stretch", 1.0, "Uniform Stretch: l / l0", reals(End::Closed, 0.01, 100, End::Closed, "of a solid"));
   setVector(r, refp, "Center", arr<double>({0, 0, 0}), "fixed point of the stretch", Length::Dim);
 }
 
