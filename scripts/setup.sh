@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what a fresh Debian bookworm machine lacks, then configures and builds perinox in
-# ./build. Safe to run again: it installs nothing that is already there and rebuilds only
-# what changed.
+# ./build (everything, or the targets named in PERINOX_TARGETS). Safe to run again: it installs
+# nothing that is already there and rebuilds only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -22,4 +22,10 @@ fi
 
 JOBS=${PERINOX_JOBS:-$(nproc)}
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j"$JOBS"
+# PERINOX_TARGETS: build only these (README command 1 builds the driver alone); default: all.
+if [ -n "${PERINOX_TARGETS:-}" ]; then
+  # shellcheck disable=SC2086
+  cmake --build build -j"$JOBS" --target $PERINOX_TARGETS
+else
+  cmake --build build -j"$JOBS"
+fi
