@@ -1,4 +1,4 @@
-# The `quick` label (docs/testing.md): every package exercised in a few minutes on 2 cores, for a
+# The `quick` label (docs/testing.md): every package exercised in under a minute on 2 cores, for a
 # developer's loop (ctest -L quick); fixtures the tests need run with them. Included by the
 # top-level CMakeLists.txt before the packages, since each directory labels its own tests.
 perinox_quick_tests(
