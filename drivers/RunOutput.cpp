@@ -372,11 +372,12 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
                  {"newton_s", facts.newtonSeconds},
                  {"residual_evaluation_s", facts.residualSeconds},
                  {"solve_in_residuals", facts.residualSeconds > 0 ? facts.solveSeconds / facts.residualSeconds : 0.0},
-                 {"newton_iteration_in_residuals",  // null where no Newton ran (ADR, arc length)
-                  perIteration && facts.newtonSeconds > 0 ? nlohmann::json(facts.newtonSeconds / facts.residualSeconds / newtonTotal)
-                                                          : nlohmann::json()},
                  {"solve_per_newton_iteration_in_residuals",
                   perIteration ? facts.solveSeconds / facts.residualSeconds / newtonTotal : 0.0}};
+  // Absent where no Newton iteration was timed (ADR, arc length, a load reached without one):
+  // summary.json holds no null, NaN or infinity.
+  if (perIteration && facts.newtonSeconds > 0)
+    j["timing"]["newton_iteration_in_residuals"] = facts.newtonSeconds / facts.residualSeconds / newtonTotal;
   j["linear_solves_total"] = solves;
   if (facts.twoStage.setups > 0)
     j["preconditioner"] = {{"type", "Two-Stage"},

@@ -134,7 +134,7 @@ set_tests_properties(badinput_bom_accepted PROPERTIES ENVIRONMENT "${PERINOX_TES
 
 # 8. Presets are names (no paths), listed when unknown; an unreadable preset is one sentence.
 perinox_bad_sets(${TINY}
-  preset_parent_path "'../solvers/direct' is not a preset name (it must be cg-ilu, direct," "Solver/Linear Solver Preset=../solvers/direct"
+  preset_parent_path "'../solvers/direct' is not a preset name (the files of xml/solvers, or custom: perinox schema --json lists them)" "Solver/Linear Solver Preset=../solvers/direct"
   preset_subdirectory "'solvers/direct' is not a preset name" "Solver/Linear Solver Preset=solvers/direct"
   preset_broken "cannot read the solver preset" "Solver/Linear Solver Preset=broken")
 perinox_bad_input(preset_no_directory ${TINY} "there are no presets in")

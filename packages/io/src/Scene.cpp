@@ -1786,8 +1786,11 @@ Teuchos::RCP<ParameterList> linearSolverList(const SceneBuild& b, const Section&
   if (std::find(presets.begin(), presets.end(), name) == presets.end()) {
     auto names = presets;
     names.push_back("custom");
+    // The list of names while it is short; past that the sentence would pass 300 characters.
+    const std::string listed = "it must be " + orList(names);
     fail(file, "'Solver/Linear Solver Preset' = " + quote(name) + " is not a preset name (" +
-                   (presets.empty() ? "there are no presets in " + b.presetDir + ", so only custom is possible" : "it must be " + orList(names)) + ")");
+                   (presets.empty() ? "there are no presets in " + b.presetDir + ", so only custom is possible"
+                    : listed.size() <= 120 ? listed : "the files of xml/solvers, or custom: perinox schema --json lists them") + ")");
   }
   const std::string presetFile = b.presetDir + "/" + name + ".xml";
   try {
