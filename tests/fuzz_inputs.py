@@ -105,9 +105,10 @@ def mesh_case(rng, work, meshes):
             data += bytes(rng.randrange(256) for _ in range(rng.randint(1, 4096)))
         with open(path, "wb") as f:
             f.write(data)
-    scene = os.path.join(meshes, "bar_exodus.xml")
-    return kind, [scene, "--set", f"Discretization/Mesh File={path}", "--set", "Regions/second half/Name=left part"
-                  if "duplicate" in kind or "stray" in kind else "Title=fuzzed mesh"]
+    args = [os.path.join(meshes, "bar_exodus.xml"), "--set", f"Discretization/Mesh File={path}"]
+    if "duplicate" in kind or "stray" in kind:  # meshes of one block: the scene's block region names it
+        args += ["--set", "Regions/second half/Name=left part"]
+    return kind, args
 
 
 def blocks_case(rng, work):
@@ -137,7 +138,7 @@ def json_values(rng):
     return rng.choice((None, True, "text", [], {}, [1, 2], -1, 0, 1e300, -1e300, 2.5, 10**12))
 
 
-def checkpoint_case(rng, work, source, meshes):
+def checkpoint_case(rng, work, source):
     ck = os.path.join(work, "case.checkpoint")
     shutil.copytree(source, ck)
     state_path = os.path.join(ck, "state.json")
@@ -242,7 +243,7 @@ def main():
         elif family == "mesh":
             kind, args = mesh_case(rng, work, a.meshes)
         elif family == "checkpoint":
-            kind, args = checkpoint_case(rng, work, source, a.meshes)
+            kind, args = checkpoint_case(rng, work, source)
         else:
             kind, args = blocks_case(rng, work)
         out = os.path.join(work, "out")
