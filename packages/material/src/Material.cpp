@@ -11,6 +11,8 @@
 // virtual calls; this runs for every particle in every Newton iteration.
 #include "perinox/material/Material.hpp"
 
+#include "Spectral.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -23,61 +25,11 @@ double lameMu(const MaterialSpec& s) { return s.E / (2.0 * (1.0 + s.nu)); }
 
 namespace {
 
+using detail::logDividedDifference;
+using detail::SymEig;
+using detail::symEig;
 template <int N>
-using Vec = Eigen::Matrix<double, N, 1>;
-
-/// (ln lb - ln la) / (lb - la) for la, lb > 0, and 1/la when la == lb: the first divided
-/// difference of ln, i.e. the Daleckii-Krein weight of the matrix logarithm. The naive
-/// quotient loses all digits as lb -> la. With the larger value as reference,
-/// x = (lb - la)/la lies in (-1, 0] and the quotient is log1p(x) / (x la), accurate to a few
-/// ulps for any x != 0; for |x| < 1e-5 the Taylor series of log1p(x)/x truncated after x^3
-/// has a relative error below x^4/5 < 2e-21, so x == 0 (equal eigenvalues) is exact too.
-/// Symmetric in (la, lb) by construction, which keeps the tangent's major symmetry.
-inline double logDividedDifference(double la, double lb) {
-  if (la < lb) std::swap(la, lb);
-  const double x = (lb - la) / la;  // exact subtraction when lb/la is in [1/2, 1] (Sterbenz)
-  if (std::abs(x) < 1e-5) return (1.0 - x * (0.5 - x * (1.0 / 3.0 - 0.25 * x))) / la;
-  return std::log1p(x) / (x * la);
-}
-
-/// Eigen decomposition b = Q diag(l) Q^T of a symmetric positive definite matrix.
-template <int N>
-struct SymEig {
-  MatD<N> Q;
-  Vec<N> l;
-};
-
-/// 2x2 closed form. With m = (b00 + b11)/2, h = (b00 - b11)/2, c = b01 and r = hypot(h, c):
-/// l0 = m + r (no cancellation, m > 0, r >= 0) and l1 = det(b)/l0, where det(b) = J^2 comes from
-/// det F (no squared-stretch cancellation), so the small eigenvalue stays accurate however stretched F is. The
-/// eigenvector of l0 is (cos t, sin t) with t = atan2(c, h)/2; for equal eigenvalues (h = c = 0)
-/// atan2(0, 0) = 0 gives Q = I, a valid basis, with no special case needed.
-inline bool symEig(const MatD<2>& b, double detb, SymEig<2>& e) {
-  const double m = 0.5 * (b(0, 0) + b(1, 1));
-  const double h = 0.5 * (b(0, 0) - b(1, 1));
-  const double c = 0.5 * (b(0, 1) + b(1, 0));
-  const double r = std::hypot(h, c);
-  e.l(0) = m + r;
-  e.l(1) = detb / e.l(0);
-  const double t = 0.5 * std::atan2(c, h);
-  const double ct = std::cos(t), st = std::sin(t);
-  e.Q << ct, -st, st, ct;
-  return e.l(1) > 0.0 && std::isfinite(e.l(0));
-}
-
-/// 3x3: Eigen's tridiagonal QR iteration (fixed size, no heap). The closed-form computeDirect
-/// is ~300 ns cheaper but not accurate enough for a Newton tangent: measured against a
-/// long-double reference, the error of ln(b) reached 2e-8 for principal stretches in [1/2, 2]
-/// and 5e-6 in [1/10, 10], against 2e-15 and 2e-13 with the QR iteration.
-inline bool symEig(const MatD<3>& b, double /*detb*/, SymEig<3>& e) {
-  Eigen::SelfAdjointEigenSolver<MatD<3>> es(b, Eigen::ComputeEigenvectors);
-  if (es.info() != Eigen::Success) return false;
-  e.Q = es.eigenvectors();
-  e.l = es.eigenvalues();
-  // Extreme stretch (condition number of F beyond ~1e8) can round the smallest eigenvalue of b
-  // to <= 0; report failure instead of taking the log of it.
-  return e.l.minCoeff() > 0.0 && e.l.allFinite();
-}
+using Vec = detail::Vec<N>;
 
 /// Kinematics and Kirchhoff stress of Hencky elasticity in dimension N (2 or 3).
 template <int N>
@@ -191,6 +143,23 @@ Material::Material(const MaterialSpec& spec) : spec_(spec) {
   // PlaneStrain, so rejecting it would only punish callers who did not touch it).
   if (spec.dim != 2) spec_.planar = PlanarMode::None;
 
+  const PlasticitySpec& pl = spec_.plastic;
+  if (pl.enabled) {
+    auto bad = [](const std::string& what) {
+      throw std::invalid_argument("perinox::Material: " + what);
+    };
+    if (!(pl.yieldStress > 0.0) || !std::isfinite(pl.yieldStress))
+      bad("the yield stress must be positive and finite (got " + std::to_string(pl.yieldStress) + ").");
+    if (!(pl.hardeningModulus >= 0.0) || !std::isfinite(pl.hardeningModulus))
+      bad("the hardening modulus must be zero or positive and finite (got " + std::to_string(pl.hardeningModulus) + ").");
+    if (pl.voce && (!(pl.saturationStress >= pl.yieldStress) || !std::isfinite(pl.saturationStress)))
+      bad("the Voce saturation stress must be finite and at least the yield stress (got " +
+          std::to_string(pl.saturationStress) + " against " + std::to_string(pl.yieldStress) + ").");
+    if (pl.voce && (!(pl.saturationRate > 0.0) || !std::isfinite(pl.saturationRate)))
+      bad("the Voce saturation rate must be positive and finite (got " + std::to_string(pl.saturationRate) + ").");
+    stateSize_ = spec_.dim == 1 ? 3 : spec_.dim == 3 ? 8 : spec_.planar == PlanarMode::PlaneStress ? 7 : 6;
+  }
+
   lambda3d_ = lameLambda(spec_);
   mu_ = lameMu(spec_);
   lambda_ = spec_.planar == PlanarMode::PlaneStress ? 2.0 * lambda3d_ * mu_ / (lambda3d_ + 2.0 * mu_)
@@ -200,6 +169,7 @@ Material::Material(const MaterialSpec& spec) : spec_(spec) {
 template <int D>
 bool Material::stress(const MatD<D>& F, MatD<D>& P) const {
   if (D != spec_.dim) throwDimMismatch(D, spec_.dim);
+  if (spec_.plastic.enabled) return plasticEval<D>(F, nullptr, P, nullptr, nullptr, nullptr);
   if (spec_.kind == MaterialKind::SmallStrain) {
     if (!F.allFinite()) return false;
     if constexpr (D == 1) {
@@ -226,6 +196,7 @@ bool Material::stress(const MatD<D>& F, MatD<D>& P) const {
 template <int D>
 bool Material::stressTangent(const MatD<D>& F, MatD<D>& P, TangentD<D>& A) const {
   if (D != spec_.dim) throwDimMismatch(D, spec_.dim);
+  if (spec_.plastic.enabled) return plasticEval<D>(F, nullptr, P, &A, nullptr, nullptr);
   if (spec_.kind == MaterialKind::SmallStrain) {
     if (!F.allFinite()) return false;
     if constexpr (D == 1) {
@@ -257,6 +228,10 @@ bool Material::stressTangent(const MatD<D>& F, MatD<D>& P, TangentD<D>& A) const
 template <int D>
 bool Material::cauchy(const MatD<D>& F, Eigen::Matrix3d& sigma) const {
   if (D != spec_.dim) throwDimMismatch(D, spec_.dim);
+  if (spec_.plastic.enabled) {
+    MatD<D> P;
+    return plasticEval<D>(F, nullptr, P, nullptr, nullptr, &sigma);
+  }
   // sigma is written only on success, like P in stress().
   if (spec_.kind == MaterialKind::SmallStrain) {
     if (!F.allFinite()) return false;
