@@ -45,6 +45,11 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
     for (std::size_t k = 0; k < xv.size(); ++k) out << "x " << xv[k].first << ' ' << xv[k].second << ' ' << pv[k].second << '\n';
     for (const auto& [a, b] : ev.ownedBrokenBonds()) out << "bond " << a << ' ' << b << '\n';
     for (const auto& [g, v] : ev.ownedFrozenDofs()) out << "frozen " << g << ' ' << v << '\n';
+    for (const auto& [g, values] : ev.ownedHistory()) {
+      out << "state " << g;
+      for (double v : values) out << ' ' << v;
+      out << '\n';
+    }
     writeFileAtomic(plan.staging + "/rank_" + std::to_string(rank) + ".txt", out.str());
   });
   agreed(comm, [&] {
@@ -245,11 +250,12 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
     const auto& probes = state.at("probes");
     if (probes.size() != scene.probes.size()) throw std::runtime_error("probe histories do not match the scene's probes");
     for (const auto& p : probes) {
-      // A probe's history has a value per accepted step, at its load factor (or none: a profile).
+      // A probe's history has a value per accepted step, at its load factor (or none: a profile);
+      // the records hold the stepper's load factor, the pseudo-time of a load path.
       const auto history = p.get<std::vector<std::pair<double, std::vector<double>>>>();
       if (!history.empty() && (history.size() != recordedPath.size() ||
                                !std::equal(history.begin(), history.end(), recordedPath.begin(),
-                                           [](const auto& h, double l) { return h.first == l; })))
+                                           [&](const auto& h, double l) { return h.first == loadOnPath(scene.solver.loadPath, l); })))
         throw std::runtime_error("a probe history does not follow the step records");
     }
   } catch (const std::exception& e) {
@@ -262,7 +268,7 @@ void checkStateValues(const nlohmann::json& state, const Scene& scene, long long
 
 /// One rank file's lines ("x DOF X XPREV", "bond GID_I GID_J", "frozen DOF VALUE") into c; a DOF
 /// must be a free DOF of the scene (particle * dim + component).
-void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, const std::string& where) {
+void readRankFile(const std::string& f, const ProblemSpec& P, int stateDoubles, Checkpoint& c, const std::string& where) {
   const long long particles = P.particleCount();
   const int D = P.dim();
   auto freeDof = [&](long long g) {
@@ -301,6 +307,17 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
     } else if (kind == "frozen") {
       ok = P.damage && static_cast<bool>(ls >> g >> v1) && freeDof(g);
       if (ok) c.frozen.emplace_back(g, number(v1, ok));
+    } else if (kind == "state") {
+      if (stateDoubles == 0)
+        throw std::invalid_argument(where + ": " + f + " holds material states, but no material of the scene has history");
+      ok = static_cast<bool>(ls >> g) && g >= 0 && g < particles;
+      std::vector<double> values;
+      while (ok && ls >> v1) values.push_back(number(v1, ok));
+      if (ok && static_cast<int>(values.size()) != stateDoubles)
+        throw std::invalid_argument(where + ": the state of particle " + std::to_string(g) + " in " + f + " has " +
+                                    std::to_string(values.size()) + " values, the scene's materials keep " +
+                                    std::to_string(stateDoubles) + " (another material or model)");
+      if (ok) c.history.emplace_back(g, std::move(values));
     } else {
       ok = false;
     }
@@ -311,10 +328,11 @@ void readRankFile(const std::string& f, const ProblemSpec& P, Checkpoint& c, con
 }
 
 /// A checkpoint record as it travels: kind, the particle whose owner receives it, and three values
-/// (x: DOF, X, XPREV; frozen: DOF, VALUE, 0; bond: GID_I, GID_J, 0). Ids are below 2^53 (the
-/// scene's particle limit is 5e7), so a double carries them exactly.
+/// (x: DOF, X, XPREV; frozen: DOF, VALUE, 0; bond: GID_I, GID_J, 0; state: GID, index, value, one
+/// record per value). Ids are below 2^53 (the scene's particle limit is 5e7), so a double carries
+/// them exactly.
 constexpr int kRecord = 5;
-enum RecordKind { kX = 0, kFrozen = 1, kBond = 2 };
+enum RecordKind { kX = 0, kFrozen = 1, kBond = 2, kState = 3 };
 
 /// c's values and bonds sent to the owners of their particles (collective): first to the id slab
 /// of the particle (idSlabOf), which has learned from every rank which of its slab's particles
@@ -348,15 +366,23 @@ Checkpoint routeToOwners(const Checkpoint& c, const ProblemSpec& P, const Teucho
     send(kBond, a, static_cast<double>(a), static_cast<double>(b), 0.0);
     send(kBond, b, static_cast<double>(a), static_cast<double>(b), 0.0);
   }
+  for (const auto& [g, values] : c.history)
+    for (std::size_t k = 0; k < values.size(); ++k) send(kState, g, static_cast<double>(g), static_cast<double>(k), values[k]);
   const std::vector<double> atSlab = exchangeRecords(comm, recs, kRecord, to);
   to.clear();
   for (std::size_t k = 0; k < atSlab.size(); k += kRecord) to.push_back(owner[static_cast<long long>(atSlab[k + 1]) - begin]);
   const std::vector<double> atOwner = exchangeRecords(comm, atSlab, kRecord, to);
   Checkpoint out;
+  std::map<long long, std::vector<double>> states;
   for (std::size_t k = 0; k < atOwner.size(); k += kRecord) {
     const double* r = &atOwner[k];
     const long long a = static_cast<long long>(r[2]);
-    if (r[0] == kX) {
+    if (r[0] == kState) {
+      auto& v = states[a];
+      const std::size_t i = static_cast<std::size_t>(r[3]);
+      if (v.size() <= i) v.resize(i + 1, 0.0);
+      v[i] = r[4];
+    } else if (r[0] == kX) {
       out.x.emplace_back(a, r[3]);
       out.xPrevious.emplace_back(a, r[4]);
     } else if (r[0] == kFrozen) {
@@ -365,6 +391,7 @@ Checkpoint routeToOwners(const Checkpoint& c, const ProblemSpec& P, const Teucho
       out.broken.emplace_back(a, static_cast<long long>(r[3]));
     }
   }
+  for (auto& [g, v] : states) out.history.emplace_back(g, std::move(v));
   return out;
 }
 
@@ -379,7 +406,7 @@ std::pair<long long, bool> countValues(const Checkpoint& c) {
 }  // namespace
 
 Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles,
-                          const Teuchos::Comm<int>& comm) {
+                          int stateDoubles, const std::vector<long long>& owned, const Teuchos::Comm<int>& comm) {
   const std::string where = "checkpoint '" + dir + "'";
   const ProblemSpec& P = *scene.problem;
   const bool share = P.distributed && comm.getSize() > 1;
@@ -401,7 +428,7 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   throwAgreed<std::invalid_argument>(comm, [&] {
     for (int r = 0; r < ranks; ++r)
       if (!share || r % comm.getSize() == comm.getRank())
-        readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", P, c, where);
+        readRankFile(dir + "/rank_" + std::to_string(r) + ".txt", P, stateDoubles, c, where);
   });
   if (share) {
     Checkpoint routed = routeToOwners(c, P, comm);
@@ -430,6 +457,21 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   if (count != freeDofs || twice)
     throw std::invalid_argument(where + " holds " + std::to_string(count) + " displacement values for " +
                                 std::to_string(freeDofs) + " free DOFs (damaged or from another discretisation)");
+  // With history, every owned particle has its committed state (once).
+  throwAgreed<std::invalid_argument>(comm, [&] {
+    if (stateDoubles == 0) return;
+    std::vector<long long> have;
+    for (const auto& e : c.history)
+      if (std::binary_search(owned.begin(), owned.end(), e.first)) have.push_back(e.first);
+    std::sort(have.begin(), have.end());
+    if (std::adjacent_find(have.begin(), have.end()) != have.end())
+      throw std::invalid_argument(where + " holds two states for particle " +
+                                  std::to_string(*std::adjacent_find(have.begin(), have.end())));
+    for (long long g : owned)
+      if (!std::binary_search(have.begin(), have.end(), g))
+        throw std::invalid_argument(where + " holds no material state for particle " + std::to_string(g) +
+                                    " (written before the scene's material had history, or damaged)");
+  });
   return c;
 }
 

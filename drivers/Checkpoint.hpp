@@ -22,11 +22,13 @@ namespace perinox {
 /// resumed on any number of ranks and any partition (the solution map's free-DOF numbers follow
 /// the ranks and are not kept). Files: state.json (rank 0: format 2, counters, step records,
 /// probes) and rank_R.txt per writing rank (lines "x DOF X XPREV", "bond GID_I GID_J", "frozen
-/// DOF VALUE"; doubles in hexadecimal, so a resumed run starts from bit-identical numbers).
+/// DOF VALUE", and with a material with history "state GID V1 ... VN", the committed state of a
+/// particle; doubles in hexadecimal, so a resumed run starts from bit-identical numbers).
 struct Checkpoint {
   nlohmann::json state;
   std::vector<std::pair<long long, double>> x, xPrevious, frozen;
   std::vector<std::pair<long long, long long>> broken;
+  std::vector<std::pair<long long, std::vector<double>>> history;  // per owned particle (after reading)
 };
 
 /// A hash (FNV-1a, 16 hex digits) of the scene's particle file or mesh, "" for a lattice: a
@@ -47,8 +49,10 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
 /// only and sends each value and broken bond to the owners of its particles through the id-slab
 /// rendezvous, so each rank receives its share alone (owned DOFs' values, frozen DOFs, and the
 /// broken bonds with an owned end).
+/// stateDoubles: the doubles of committed state per particle of this scene's model (0: none);
+/// every particle this rank owns (owned, sorted global ids) must then receive its state.
 Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles,
-                          const Teuchos::Comm<int>& comm);
+                          int stateDoubles, const std::vector<long long>& owned, const Teuchos::Comm<int>& comm);
 
 /// Checkpoints after accepted steps, every --checkpoint-steps steps and/or --checkpoint-seconds.
 class CheckpointWriter final : public StepObserver {

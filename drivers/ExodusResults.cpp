@@ -16,13 +16,17 @@ namespace perinox {
 
 namespace {
 
-// Per particle: displacement (3), Cauchy stress (6: xx yy zz xy yz zx), damage.
-const std::vector<std::string>& nodalNames() {
-  static const std::vector<std::string> n{"displacement_x", "displacement_y", "displacement_z", "stress_xx", "stress_yy",
-                                          "stress_zz",      "stress_xy",      "stress_yz",      "stress_zx", "damage"};
+// Per particle: displacement (3), Cauchy stress (6: xx yy zz xy yz zx), damage; with a plastic
+// material also the equivalent plastic strain and the yield flag of the last step.
+std::vector<std::string> nodalNames(bool plastic) {
+  std::vector<std::string> n{"displacement_x", "displacement_y", "displacement_z", "stress_xx", "stress_yy",
+                             "stress_zz",      "stress_xy",      "stress_yz",      "stress_zx", "damage"};
+  if (plastic) {
+    n.push_back("equivalent_plastic_strain");
+    n.push_back("yielded");
+  }
   return n;
 }
-constexpr int kPerParticle = 10;
 
 /// Runs f on the ranks that write (rank 0, or every rank when each writes its own file); if it
 /// throws anywhere, every rank throws the lowest failing rank's sentence (no rank is left
@@ -64,7 +68,7 @@ ExodusRecorder::ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scen
   if (!perRank_) {
     writeAgreed(comm, comm.getRank() == 0, [&] {
       writer_ = std::make_unique<ExodusWriter>(dir + "/fields.e", d.dim, d.thickness, d.X, d.volume, d.block,
-                                               scene.regions, nodalNames(), globals);
+                                               scene.regions, nodalNames(ev.problem().plastic()), globals);
     });
     return;
   }
@@ -91,7 +95,7 @@ ExodusRecorder::ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scen
   }
   writeAgreed(comm, true, [&] {
     writer_ = std::make_unique<ExodusWriter>(dir + "/" + exodusPieceName(comm.getSize(), comm.getRank()), d.dim,
-                                             d.thickness, X, volume, block, sets, nodalNames(), globals, owned);
+                                             d.thickness, X, volume, block, sets, nodalNames(ev.problem().plastic()), globals, owned);
   });
 }
 
@@ -109,6 +113,8 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
   const auto outs = ev_.ownedOutputs(x);
   const std::vector<double> damage = ev_.problem().damage ? ev_.ownedDamage() : std::vector<double>(outs.size(), 0.0);
   const int n = static_cast<int>(ev_.ownedParticles().size());
+  const bool plastic = ev_.problem().plastic();
+  const int kPerParticle = plastic ? 12 : 10;
   std::vector<double> mine(static_cast<std::size_t>(n) * kPerParticle, 0.0);
   for (int i = 0; i < n; ++i) {
     double* v = &mine[static_cast<std::size_t>(i) * kPerParticle];
@@ -116,6 +122,10 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
     const auto& s = outs[i].cauchy;
     v[3] = s(0, 0), v[4] = s(1, 1), v[5] = s(2, 2), v[6] = s(0, 1), v[7] = s(1, 2), v[8] = s(2, 0);
     v[9] = damage[i];
+    if (plastic) {
+      v[10] = outs[i].eqps;
+      v[11] = outs[i].yielded ? 1.0 : 0.0;
+    }
   }
   std::vector<double> globals{lambda};
   for (std::size_t k = 0; k < scene_.probes.size(); ++k) {

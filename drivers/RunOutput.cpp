@@ -61,7 +61,11 @@ std::vector<double> finitePrefix(const std::vector<double>& r) {
   return {r.begin(), std::find_if(r.begin(), r.end(), [](double v) { return !std::isfinite(v); })};
 }
 
-const char* const kFieldsHeader = "id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage";
+/// fields.csv's columns; with a plastic material also the equivalent plastic strain and the
+/// yield flag of the last step (only the effects a scene has get columns).
+std::string fieldsHeader(bool plastic) {
+  return std::string("id,x,y,z,ux,uy,uz,sxx,syy,szz,sxy,fictitious,damage") + (plastic ? ",eqps,yielded" : "");
+}
 
 /// A profile's file name part: its probe's name with spaces as underscores.
 std::string profileName(const ProbeDef& probe) {
@@ -119,10 +123,11 @@ void mergeFieldParts(const Scene& scene, const std::string& staging, int nranks)
     for (int r = 0; r < nranks; ++r) parts.push_back(staging + "/" + stem + "_" + std::to_string(r) + ".csv.part");
     return parts;
   };
-  mergeSortedParts(partsOf("fields"), kFieldsHeader, staging + "/fields.csv");
+  const std::string header = fieldsHeader(scene.problem->plastic());
+  mergeSortedParts(partsOf("fields"), header, staging + "/fields.csv");
   for (const auto& probe : scene.probes)
     if (probe.quantity == "Profile")
-      mergeSortedParts(partsOf("profile_" + profileName(probe)), kFieldsHeader,
+      mergeSortedParts(partsOf("profile_" + profileName(probe)), header,
                        staging + "/profile_" + profileName(probe) + ".csv");
 }
 
@@ -140,7 +145,7 @@ std::string pathCsv(const Scene& scene, const RunResult& res) {
       }
   path << '\n' << std::setprecision(15);
   for (std::size_t i = 0; i < res.pathLoadFactors.size(); ++i) {
-    path << i + 1 << ',' << res.pathLoadFactors[i];
+    path << i + 1 << ',' << loadOnPath(scene.solver.loadPath, res.pathLoadFactors[i]);
     for (std::size_t k = 0; k < res.probes.size(); ++k)
       if (scene.probes[k].quantity != "Profile")
         for (double v : res.probes[k].second[i].second) path << ',' << v;
@@ -203,6 +208,9 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   PointField rk{"rank", 1, std::vector<double>(n, static_cast<double>(rank))};
   const bool damage = ev.problem().damage;
   PointField dmg{"damage", 1, damage ? ev.ownedDamage() : std::vector<double>(n, 0.0)};
+  const bool plastic = ev.problem().plastic();
+  PointField eqps{"equivalent_plastic_strain", 1, std::vector<double>(n, 0.0)};
+  PointField yielded{"yielded", 1, std::vector<double>(n, 0.0)};
   std::vector<std::string> rows(n);  // this rank's fields.csv rows
   for (std::size_t i = 0; i < n; ++i) {
     const long long p = ev.ownedParticles()[i];
@@ -212,16 +220,24 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values[9 * i + 3 * r + c] = outs[i].cauchy(r, c);
     fict.values[i] = d.fictitious[k];
+    eqps.values[i] = outs[i].eqps;
+    yielded.values[i] = outs[i].yielded ? 1.0 : 0.0;
     std::ostringstream csv;
     csv << std::setprecision(12);
     csv << p << ',' << d.X[k][0] << ',' << d.X[k][1] << ',' << d.X[k][2] << ',' << disp.values[3 * i] << ','
         << disp.values[3 * i + 1] << ',' << disp.values[3 * i + 2] << ',' << outs[i].cauchy(0, 0) << ','
         << outs[i].cauchy(1, 1) << ',' << outs[i].cauchy(2, 2) << ',' << outs[i].cauchy(0, 1) << ','
-        << static_cast<int>(d.fictitious[k]) << ',' << dmg.values[i] << '\n';
+        << static_cast<int>(d.fictitious[k]) << ',' << dmg.values[i];
+    if (plastic) csv << ',' << outs[i].eqps << ',' << (outs[i].yielded ? 1 : 0);
+    csv << '\n';
     rows[i] = csv.str();
   }
   std::vector<PointField> fields{disp, stress, fict, rk};
   if (damage) fields.push_back(dmg);  // only where the effect is on
+  if (plastic) {
+    fields.push_back(eqps);
+    fields.push_back(yielded);
+  }
   injectedWriteFault(rank, dir + "/fields_" + std::to_string(rank) + ".vtu");
   if (vtk) {
     const std::string piece = "fields_" + std::to_string(rank) + ".vtu";
@@ -344,7 +360,13 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   j["method"] = scene.solver.method;
   j["tolerance"] = scene.solver.tolerance;
   json steps = json::array();
-  for (const auto& s : res.steps) steps.push_back(stepJson(s, scene.problem->damage, arcLength));
+  for (const auto& s : res.steps) {
+    steps.push_back(stepJson(s, scene.problem->damage, arcLength));
+    if (!scene.solver.loadPath.empty()) {  // the stepper's load factor is the path's pseudo-time
+      steps.back()["pseudo_time"] = s.loadFactor;
+      steps.back()["load_factor"] = loadOnPath(scene.solver.loadPath, s.loadFactor);
+    }
+  }
   j["steps"] = steps;
   // The run's totals, one pass over the steps: the whole work (Newton iterations of every
   // attempt, ADR's iterations for ADR; linear solves; Krylov iterations, 0 with a direct

@@ -167,7 +167,8 @@ LoadStepperOptions loadSteppingOptions(const Scene& scene, const PeridynamicEval
   const auto& s = scene.solver;
   const bool adr = s.method == "ADR";
   Teuchos::ParameterList l("Load Stepping");
-  l.set("Load Steps", s.loadSteps);
+  const int segments = std::max<int>(1, static_cast<int>(s.loadPath.size()));
+  l.set("Load Steps", s.loadSteps * segments);  // the stepper's steps span the whole path
   l.set("Max Cutbacks", s.maxCutbacks);
   l.set("Min Increment", s.minIncrement);
   l.set("Max Total Steps", s.maxTotalSteps);
@@ -182,6 +183,7 @@ LoadStepperOptions loadSteppingOptions(const Scene& scene, const PeridynamicEval
   l.set("Tangent Predictor", !adr && (scene.problem->rotates() || ev.prescribesDisplacement()));
   LoadStepperOptions o = LoadStepperOptions::fromParameterList(l, scene.file);
   o.keyPrefix = "Solver/";
+  if (!s.loadPath.empty()) o.stops = LoadFactorModel::pathStops(segments);
   // The tangent predictor's system is a starting guess: with the Eisenstat-Walker forcing term it
   // is solved as loosely as Newton's first system may be (1e-3), else to the Linear Tolerance.
   // (1e-2 cost the block of 51 200 particles a fourth Newton iteration; 1e-3 and 1e-12 give three.)
@@ -240,6 +242,7 @@ std::pair<double, int> resumeFrom(const Checkpoint& resume, PeridynamicEvaluator
   for (std::size_t k = 0; k < res.probes.size(); ++k)
     res.probes[k].second = st.at("probes").at(k).get<std::vector<std::pair<double, std::vector<double>>>>();
   evaluator.restoreDamage(resume.broken, st.at("detached").get<std::vector<long long>>(), resume.frozen);
+  evaluator.restoreHistory(resume.history);
   auto xc = Thyra::createMember(evaluator.get_x_space()), xp = Thyra::createMember(evaluator.get_x_space());
   evaluator.setOwnedDofValues(*xc, resume.x);
   evaluator.setOwnedDofValues(*xp, resume.xPrevious);
@@ -290,6 +293,10 @@ Solved loadStepping(const SolveContext& c, const std::optional<Checkpoint>& resu
   LoadStepper stepper(c.model, scene.solver.method == "ADR" ? adrStepSolve(scene, c.evaluator) : newtonSolve,
                       loadSteppingOptions(scene, *c.evaluator));
   stepper.setReequilibrationSolve(newtonSolve);
+  if (c.evaluator->hasHistory()) {
+    const auto ev = c.evaluator;
+    stepper.setHistoryCommit([ev](const Thyra::VectorBase<double>& x) { ev->commitHistory(x); });
+  }
   const auto damage = damagePolicy(scene, *c.evaluator);
   if (damage) stepper.setDamagePolicy(damage.get());
   Solved out;
@@ -334,6 +341,7 @@ Solved arcLengthContinuation(const SolveContext& c, RunResult& res) {
       return probeValue(*ev, scene.probes[deflProbe], state, u)[A.deflectionComponent];
     });
   if (scene.solver.stabilityCheck) arc.setStabilityCount([&](const Thyra::VectorBase<double>& s) { return ev->negativePivots(s); });
+  if (ev->hasHistory()) arc.setHistoryCommit([ev](const Thyra::VectorBase<double>& x) { ev->commitHistory(x); });
   ArcConsole console(arc, deflProbe >= 0, c.speak);
   arc.addObserver(&c.probes);
   arc.addObserver(&console);
@@ -360,6 +368,7 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
   // The load factor is the evaluator's parameter p(0): the stepper's wrapper passes it to every
   // evaluation, and keeps the evaluator's own (its diagnostics, damage and outputs use it).
   auto model = Teuchos::rcp(new LoadFactorModel(evaluator));
+  model->setLoadPath(scene.solver.loadPath);
   model->onLoadFactor([ev = evaluator.get()](double lambda) { ev->setLoadFactor(lambda); });
   res.probes.resize(scene.probes.size());
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
@@ -469,7 +478,10 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   res.particles = scene.problem->particleCount();
   res.dofs = evaluator->numFreeDofs();
   std::optional<Checkpoint> resume;
-  if (!options.restartFrom.empty()) resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles, *comm);
+  if (!options.restartFrom.empty())
+    resume = readCheckpoint(options.restartFrom, scene, res.dofs, res.particles,
+                            evaluator->hasHistory() ? evaluator->model().stateDoublesPerParticle() : 0,
+                            evaluator->ownedParticles(), *comm);
 
   const std::string& staging = folders.output.staging;
   StagingGuard stagingGuard{staging, rank == 0};

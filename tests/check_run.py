@@ -221,10 +221,12 @@ def main():
             s = json.load(f)
         if a.converged and not s["converged"]:
             fail("run did not converge: " + s.get("failure", "?"))
-        # Arc-length continuation ends at its own target (load factor or deflection), not at 1.
+        # Arc-length continuation ends at its own target (load factor or deflection), not at 1;
+        # a load path at its last corner, pseudo-time 1.
+        last = s["steps"][-1]
         if a.converged and s.get("continuation", "Load Stepping") == "Load Stepping" \
-                and abs(s["steps"][-1]["load_factor"] - 1.0) > 1e-12:
-            fail("run did not reach load factor 1")
+                and abs(last.get("pseudo_time", last["load_factor"]) - 1.0) > 1e-12:
+            fail("run did not reach the end of its load path" if "pseudo_time" in last else "run did not reach load factor 1")
         if a.max_error is not None:
             e = s["errors"]["e_u"]
             print(f"e_u = {e:.6g} (bound {a.max_error})")

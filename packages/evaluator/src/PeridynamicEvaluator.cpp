@@ -347,6 +347,39 @@ Teuchos::RCP<TCrsMatrix> PeridynamicEvaluator::assembledJacobianAt(const std::ve
 
 std::size_t PeridynamicEvaluator::matrixBytes() const { return assembler_->matrixBytes(); }
 
+void PeridynamicEvaluator::commitHistory(const Thyra::VectorBase<double>& x) {
+  if (!model_->hasHistory()) return;
+  model_->commitState(localDisplacements(x));
+}
+
+std::vector<std::pair<long long, std::vector<double>>> PeridynamicEvaluator::ownedHistory() const {
+  std::vector<std::pair<long long, std::vector<double>>> out;
+  if (!model_->hasHistory()) return out;
+  const int n = model_->stateDoublesPerParticle();
+  const LocalParticles& p = model_->particles();
+  out.reserve(p.numOwned);
+  for (int i = 0; i < p.numOwned; ++i) {
+    const double* s = model_->committedState(i);
+    out.emplace_back(p.globalId[i], std::vector<double>(s, s + n));
+  }
+  return out;
+}
+
+void PeridynamicEvaluator::restoreHistory(const std::vector<std::pair<long long, std::vector<double>>>& states) {
+  if (!model_->hasHistory()) return;
+  const std::size_t n = static_cast<std::size_t>(model_->stateDoublesPerParticle());
+  std::vector<double> all = model_->committedStates();
+  for (const auto& [g, v] : states) {
+    const int i = model_->particles().ownedLocal(g);
+    if (i < 0) continue;
+    if (v.size() != n)
+      throw std::invalid_argument("the state of particle " + std::to_string(g) + " has " + std::to_string(v.size()) +
+                                  " values; this model keeps " + std::to_string(n));
+    std::copy(v.begin(), v.end(), all.begin() + static_cast<std::ptrdiff_t>(i * n));
+  }
+  model_->setCommittedStates(all);
+}
+
 std::vector<double> PeridynamicEvaluator::localDisplacements(const Thyra::VectorBase<double>& x) const {
   const ProblemSpec& P = *problem_;
   const int D = P.dim();

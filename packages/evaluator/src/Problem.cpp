@@ -129,6 +129,12 @@ std::vector<MaterialSpec> ProblemSpec::materials() const {
   return m;
 }
 
+bool ProblemSpec::plastic() const {
+  for (const MaterialSpec& m : materials())
+    if (m.plastic.enabled) return true;
+  return false;
+}
+
 double ProblemSpec::stiffestModulus() const {
   double E = blocks.empty() ? material.E : 0.0;
   for (const auto& b : blocks) E = std::max(E, b.material.E);

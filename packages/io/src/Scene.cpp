@@ -310,11 +310,26 @@ ParameterList probeTemplate() {
   return r;
 }
 
+enum class PlasticityChoice { None, J2 };
+enum class HardeningChoice { Linear, Voce };
+
 void materialKeys(ParameterList& m, const std::string& lead = "") {
   setChoice<MaterialKind>(m, "Model", "Hencky", {{"Hencky", MaterialKind::Hencky, "finite deformation"}, {"Small Strain", MaterialKind::SmallStrain, ""}}, lead.empty() ? "" : lead + "model: ");
   setChoice<PlanarMode>(m, "Plane", "Plane Strain", {{"Plane Strain", PlanarMode::PlaneStrain, ""}, {"Plane Stress", PlanarMode::PlaneStress, ""}}, lead.empty() ? "2D: " : lead + "plane (2D): ");
   setNumber(m, "Young's Modulus", 0.0, lead + "E, in the scene's stress units", positive());
   setNumber(m, "Poisson's Ratio", 0.0, lead + "nu", reals(End::Open, -1, 0.5, End::Open, "nu = 0.5 is incompressible: the Lame constant lambda is infinite"));
+  setChoice<PlasticityChoice>(m, "Plasticity", "None",
+                  {{"None", PlasticityChoice::None, "elastic"},
+                   {"J2", PlasticityChoice::J2, "von Mises plasticity with isotropic hardening (docs/plasticity.md); Hencky: finite strain, F = Fe Fp; Small Strain: additive"}},
+                  lead.empty() ? "" : lead + "plasticity: ");
+  setNumber(m, "Yield Stress", 0.0, lead + "initial yield stress sigma_y0 (J2), in the scene's stress units; must be positive with Plasticity = J2", nonNegative());
+  setNumber(m, "Hardening Modulus", 0.0, lead + "linear isotropic hardening modulus H (J2): sigma_y grows by H per unit equivalent plastic strain; 0 with Hardening = Linear is perfect plasticity", nonNegative());
+  setChoice<HardeningChoice>(m, "Hardening", "Linear",
+                  {{"Linear", HardeningChoice::Linear, "sigma_y = sigma_y0 + H alpha"},
+                   {"Voce", HardeningChoice::Voce, "sigma_y = sigma_y0 + H alpha + (sigma_inf - sigma_y0) (1 - exp(-delta alpha))"}},
+                  lead.empty() ? "" : lead + "hardening: ");
+  setNumber(m, "Saturation Stress", 0.0, lead + "sigma_inf of Voce hardening (at least the Yield Stress)", nonNegative());
+  setNumber(m, "Saturation Rate", 0.0, lead + "delta of Voce hardening (positive; dimensionless, per unit equivalent plastic strain)", nonNegative());
 }
 
 void damageLawKeys(ParameterList& dm, const std::string& lead = "") {
@@ -468,7 +483,8 @@ void solverSchema(ParameterList& so) {
   setNumber(so, "ADR Tolerance", 1e-6, "ADR: stop when both e1 and e2 (seed 001) are below this", reals(End::Open, 0, 1, End::Open));
   setNumber(so, "ADR Max Iterations", 2000000, "ADR: iterations allowed per load step", ints(1));
   setNumber(so, "ADR Mass Safety", 4.0, "ADR: fictitious mass = safety * 1/4 sum_j |K_ij|", reals(End::Closed, 1, 0, End::None, "the stability bound"));
-  setNumber(so, "Load Steps", 10, "equal load increments to load factor 1", ints(1, kMaxLoadSteps));
+  setNumber(so, "Load Steps", 10, "equal load increments to load factor 1 (with a Load Path: per segment)", ints(1, kMaxLoadSteps));
+  so.set("Load Path", Array<double>(), "the load factors the load passes through after 0, piecewise linear in pseudo-time, e.g. {1, 0, 1.2}: load, unload, reload past the first peak (empty: 0 to 1); steps land on every corner, the step after a corner starts from the converged state; probes and fields report the load factor, summary.json's steps also the pseudo-time");
   setNumber(so, "Tolerance", 1e-10, "|R| / |f_ext| (or / |reaction| when f_ext = 0)", reals(End::Open, 0, 1, End::Open));
   setNumber(so, "Max Newton Iterations", 25, "per load step", ints(1, kMaxNewtonIterations));
   setChoice(so, "Line Search", "Full Step",
@@ -1173,6 +1189,22 @@ MaterialSpec materialFrom(const Section& m, int dim) {
   mat.planar = dim == 2 ? m.choice<PlanarMode>("Plane") : PlanarMode::None;
   mat.E = m.ranged<double>("Young's Modulus");
   mat.nu = m.ranged<double>("Poisson's Ratio");
+  if (m.choice<PlasticityChoice>("Plasticity") == PlasticityChoice::J2) {
+    PlasticitySpec& p = mat.plastic;
+    p.enabled = true;
+    p.yieldStress = m.ranged<double>("Yield Stress");
+    if (!(p.yieldStress > 0.0)) fail(m.file, m.key("Yield Stress") + " must be positive with Plasticity = J2 (it is the initial yield stress)");
+    p.hardeningModulus = m.ranged<double>("Hardening Modulus");
+    p.voce = m.choice<HardeningChoice>("Hardening") == HardeningChoice::Voce;
+    if (p.voce) {
+      p.saturationStress = m.ranged<double>("Saturation Stress");
+      p.saturationRate = m.ranged<double>("Saturation Rate");
+      if (!(p.saturationStress >= p.yieldStress))
+        fail(m.file, m.key("Saturation Stress") + " must be at least " + m.key("Yield Stress") + " with Hardening = Voce (got " +
+                         shownValue(p.saturationStress) + " against " + shownValue(p.yieldStress) + ")");
+      if (!(p.saturationRate > 0.0)) fail(m.file, m.key("Saturation Rate") + " must be positive with Hardening = Voce");
+    }
+  }
   return mat;
 }
 
@@ -1749,6 +1781,15 @@ void readSolver(SceneBuild& b) {
   s.adrMassSafety = so.ranged<double>("ADR Mass Safety");
   s.adrMaxIterations = so.ranged<int>("ADR Max Iterations");
   s.loadSteps = so.ranged<int>("Load Steps");
+  {
+    const auto path = so.get<Array<double>>("Load Path");
+    if (path.size() > 1000) fail(b.file, "'Solver/Load Path' has " + std::to_string(path.size()) + " entries; at most 1000");
+    for (int k = 0; k < path.size(); ++k)
+      if (path[k] == (k == 0 ? 0.0 : path[k - 1]))
+        fail(b.file, "'Solver/Load Path' entry " + std::to_string(k + 1) + " (" + shownValue(path[k]) +
+                         ") equals the load factor before it; every segment must change the load");
+    s.loadPath.assign(path.begin(), path.end());
+  }
   s.tolerance = so.ranged<double>("Tolerance");
   s.maxIterations = so.ranged<int>("Max Newton Iterations");
   s.lineSearch = so.get<std::string>("Line Search");
@@ -1757,7 +1798,11 @@ void readSolver(SceneBuild& b) {
   s.maxIncrement = so.ranged<double>("Max Increment");
   s.maxCutbacks = so.ranged<int>("Max Cutbacks");
   s.maxTotalSteps = so.get<int>("Max Total Steps");
-  if (s.maxTotalSteps == 0) s.maxTotalSteps = 20 * s.loadSteps;  // <= 20 x kMaxLoadSteps: no overflow
+  const long long segments = std::max<long long>(1, static_cast<long long>(s.loadPath.size()));
+  if (s.loadSteps * segments > kMaxLoadSteps)
+    fail(b.file, "'Solver/Load Steps' x the segments of 'Solver/Load Path' must be at most " + std::to_string(kMaxLoadSteps) +
+                     ", not " + std::to_string(s.loadSteps * segments));
+  if (s.maxTotalSteps == 0) s.maxTotalSteps = static_cast<int>(20 * s.loadSteps * segments);  // <= 20 x kMaxLoadSteps
   else if (s.maxTotalSteps < s.loadSteps || s.maxTotalSteps > kMaxTotalSteps)
     fail(b.file, "'Solver/Max Total Steps' must be 0 (20 x Load Steps) or from 'Solver/Load Steps' (" + std::to_string(s.loadSteps) +
                      ") to " + std::to_string(kMaxTotalSteps) + ", not " + std::to_string(s.maxTotalSteps));
@@ -1769,6 +1814,8 @@ void readSolver(SceneBuild& b) {
   s.forcingTerm = so.get<std::string>("Forcing Term");  // Preset: resolved by readLinearSolver
   s.linearTolerance = so.ranged<double>("Linear Tolerance");
   s.continuation = so.get<std::string>("Continuation");
+  if (s.continuation == "Arc Length" && !s.loadPath.empty())
+    fail(b.file, "'Solver/Load Path' needs 'Solver/Continuation' = Load Stepping (arc length chooses the load itself)");
   readArcLength(b, so);
   s.floorFactor = so.ranged<double>("Round-off Floor Factor");
 }

@@ -58,11 +58,18 @@ struct ScalarReturn {
 /// function is decreasing (slope -M - H' < 0) and convex (sigma_y is concave), so Newton from
 /// x = 0 increases monotonically to the root: no overshoot, no safeguard needed. Linear
 /// hardening converges in one step. False only for non-finite data.
+/// A point within kYieldTolerance of the surface is elastic: re-evaluated at the F it was
+/// committed at, a point that flowed lies on the surface up to round-off (f ~ +-1e-15 sigma_y),
+/// and taking those as plastic would give a plastic tangent to about half of them at random at
+/// the start of the next step (an unloading step's Newton then cycles between the active sets).
+constexpr double kYieldTolerance = 1e-10;
+
 bool scalarReturn(const PlasticitySpec& p, double q, double alpha, double M, ScalarReturn& r) {
   r = ScalarReturn{};
-  const double f = q - p.yield(alpha);
+  const double sy = p.yield(alpha);
+  const double f = q - sy;
   if (!std::isfinite(f)) return false;
-  if (!(f > 0.0)) return true;
+  if (!(f > kYieldTolerance * sy)) return true;
   r.active = true;
   double x = 0.0;
   for (int it = 0; it < 60; ++it) {

@@ -157,7 +157,9 @@ void allRegimes(const MaterialSpec& spec) {
     }
     SCOPED_TRACE("equal principal stretches");
     const bool flowed = checkTangent<D>(m, Feq, virgin);
-    if (D == 3 || spec.planar == PlanarMode::PlaneStrain) EXPECT_TRUE(flowed);
+    if (D == 3 || spec.planar == PlanarMode::PlaneStrain) {
+      EXPECT_TRUE(flowed);
+    }
   }
 }
 

@@ -8,10 +8,13 @@ namespace perinox {
 namespace {
 
 /// P(F) (and A = dP/dF when tangent), times a modulus scale; throws for an inverted F.
+/// committed: the point's committed state (nullptr without history); trial: where to write the
+/// trial state (nullptr: nowhere).
 template <int D>
-void piola(const Material& m, const MatD<D>& F, double scale, bool tangent, int particle, MatD<D>& P,
-           TangentD<D>& A) {
-  const bool ok = tangent ? m.template stressTangent<D>(F, P, A) : m.template stress<D>(F, P);
+void piola(const Material& m, const MatD<D>& F, const double* committed, double* trial, double scale, bool tangent,
+           int particle, MatD<D>& P, TangentD<D>& A) {
+  const bool ok = tangent ? m.template stressTangent<D>(F, committed, P, A, trial)
+                          : m.template stress<D>(F, committed, P, trial);
   if (!ok) {
     std::ostringstream s;
     s << "deformation gradient is inverted or not finite (det F = " << F.determinant() << ")";
@@ -69,7 +72,7 @@ void CorrespondenceEffect<D>::addDirectional(BondWork<D>& w) const {
     P = Eigen::Map<const MatD<D>>(w.cache);
     A = Eigen::Map<const TangentD<D>>(w.cache + D * D);
   } else {
-    piola<D>(material(w.i), w.F, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
+    piola<D>(material(w.i), w.F, w.state, nullptr, scale_.empty() ? 1.0 : scale_[w.i], true, w.i, P, A);
     if (w.cache) {
       Eigen::Map<MatD<D>>(w.cache) = P;
       Eigen::Map<TangentD<D>>(w.cache + D * D) = A;
@@ -170,7 +173,8 @@ void StressPointEffect<D>::addDirectional(BondWork<D>& w) const {
     const Mat Kinv = K.inverse();
     Mat P;
     TangentD<D> A;
-    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), sc, true, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.state ? w.state + p * w.stateStride : nullptr,
+             nullptr, sc, true, w.i, P, A);
     const Mat dP = contract<D>(A, kinematics::deformationGradient(dFK, Kinv));
     for (int l = 0; l < w.m; ++l) {
       if (grp[l] != p) continue;
@@ -185,7 +189,7 @@ template <int D>
 void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   MatD<D> P;
   TangentD<D> A;
-  piola<D>(material(w.i), w.F, scale_.empty() ? 1.0 : scale_[w.i], tangent, w.i, P, A);
+  piola<D>(material(w.i), w.F, w.state, w.trial, scale_.empty() ? 1.0 : scale_[w.i], tangent, w.i, P, A);
   addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, w.h, w.gsum, [](int) { return true; });
 }
 
@@ -285,7 +289,8 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
       }
     Mat P;
     TangentD<D> A;
-    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), sc, tangent, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.state ? w.state + p * w.stateStride : nullptr,
+             w.trial ? w.trial + p * w.stateStride : nullptr, sc, tangent, w.i, P, A);
     addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, h, gsum, in);
   }
 }

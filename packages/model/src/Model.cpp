@@ -51,6 +51,8 @@ struct Model::Impl {
   virtual void addDiagonal(const Model& m, const std::vector<double>& u, double* d) const = 0;
   virtual void prepare(const LocalParticles& p) = 0;
   virtual void invalidate() = 0;
+  /// Writes the trial state at u over `state` (owned particles' blocks, as Model::state_).
+  virtual void commit(const Model& m, const std::vector<double>& u, double* state) const = 0;
   Model::ProductForm form = Model::ProductForm::Auto;
 };
 
@@ -179,6 +181,7 @@ struct ImplD final : Model::Impl {
     for (int i = 0; i < p.numOwned; ++i) {
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
+      attachState(model, i, w);
       if (fresh) linKinv_[i] = w.Kinv;
       if (fresh && damage && affine) linF_[i] = w.F;
       w.dY.resize(w.m);
@@ -506,6 +509,25 @@ struct ImplD final : Model::Impl {
     }
   }
 
+  /// Points w at the committed state of owned particle i (nothing without history).
+  static void attachState(const Model& model, int i, BondWork<D>& w) {
+    w.state = model.committedState(i);
+    w.stateStride = model.stateStride();
+  }
+
+  void commit(const Model& model, const std::vector<double>& u, double* state) const override {
+    const LocalParticles& p = model.particles();
+    const std::size_t block = static_cast<std::size_t>(model.stateDoublesPerParticle());
+    BondWork<D> w;
+    for (int i = 0; i < p.numOwned; ++i) {
+      if (model.detached(i)) continue;
+      kinematics(p, u, i, w);
+      w.state = w.trial = state + i * block;  // the material reads the committed state before writing
+      w.stateStride = model.stateStride();
+      addForces(model, w, false);
+    }
+  }
+
   /// Every effect's force states of particle w.i (and their derivatives), softened by damage.
   void addForces(const Model& model, BondWork<D>& w, bool tangent) const {
     try {
@@ -531,6 +553,7 @@ struct ImplD final : Model::Impl {
       const int i = order_.size() == static_cast<std::size_t>(p.numOwned) ? order_[ii] : ii;
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
+      attachState(model, i, w);
       const int m = w.m;
       if (tangent) w.tan.assign(static_cast<std::size_t>(m) * (m + 1), Mat::Zero());
       addForces(model, w, tangent);
@@ -577,6 +600,7 @@ struct ImplD final : Model::Impl {
     for (int i = 0; i < p.numOwned; ++i) {  // into a vector: no tile order needed
       if (model.detached(i)) continue;
       kinematics(p, u, i, w);
+      attachState(model, i, w);
       w.tan.assign(static_cast<std::size_t>(2 * w.m), Mat::Zero());
       addForces(model, w, true);
       for (int l = 0; l < w.m; ++l) {
@@ -611,12 +635,15 @@ struct ImplD final : Model::Impl {
         continue;
       }
       kinematics(p, u, i, w);
+      attachState(model, i, w);
       const double scale = p.modulusScale.empty() ? 1.0 : p.modulusScale[i];
       Mat F = w.F;
       Eigen::Matrix3d s;
       // An output state is a converged one, where every F is valid; should one not be, write
       // zero stress and flag it rather than a NaN.
       const int ng = sp ? sp->groups(w, grp) : 1;
+      double eqps = 0.0;
+      bool yielded = false;
       if (ng > 1) {
         Mat Fsum = Mat::Zero();
         Eigen::Matrix3d ssum = Eigen::Matrix3d::Zero();
@@ -632,19 +659,27 @@ struct ImplD final : Model::Impl {
           }
           const Mat Fp = kinematics::deformationGradient<Mat>(FK, K.inverse());
           Eigen::Matrix3d sp3;
-          const bool ok = model.material(i).template cauchy<D>(Fp, sp3);
+          const double* st = w.state ? w.state + g * w.stateStride : nullptr;
+          const bool ok = model.material(i).template cauchy<D>(Fp, st, sp3);
           valid = valid && ok;
           Fsum += v * Fp;
           if (ok) ssum += v * sp3;
+          eqps += v * model.material(i).equivalentPlasticStrain(st);
+          yielded = yielded || model.material(i).yielding(st);
           vsum += v;
         }
         F = Fsum / vsum;
+        eqps /= vsum;
         out[i].valid = valid;
         s = valid ? Eigen::Matrix3d(ssum / vsum) : Eigen::Matrix3d::Zero();
       } else {
-        out[i].valid = model.material(i).template cauchy<D>(F, s);
+        out[i].valid = model.material(i).template cauchy<D>(F, w.state, s);
         if (!out[i].valid) s.setZero();
+        eqps = model.material(i).equivalentPlasticStrain(w.state);
+        yielded = model.material(i).yielding(w.state);
       }
+      out[i].eqps = eqps;
+      out[i].yielded = yielded;
       out[i].F.setIdentity();
       out[i].F.template topLeftCorner<D, D>() = F;
       out[i].cauchy = scale * s;
@@ -700,6 +735,7 @@ Model::Model(const std::vector<MaterialSpec>& materials, LocalParticles particle
   }
   checkCoincident(particles_);
   checkShapeTensors();
+  initHistory();
   familyVolume0_.assign(particles_.numOwned, 0.0);
   for (int i = 0; i < particles_.numOwned; ++i)
     for (auto q = particles_.famOffset[i]; q < particles_.famOffset[i + 1]; ++q)
@@ -714,6 +750,33 @@ void Model::enableControl(const ControlSpec& c) {
 void Model::enableStressPoints(unsigned seed) {
   impl_->addStressPoints(materials_, seed);
   impl_->prepare(particles_);
+  statePoints_ = 2;  // a complete nearest-neighbour family has two stress points
+  initHistory();
+}
+
+void Model::initHistory() {
+  stateStride_ = 0;
+  for (const Material& m : materials_) stateStride_ = std::max(stateStride_, m.stateSize());
+  state_.assign(static_cast<std::size_t>(particles_.numOwned) * stateStride_ * statePoints_, 0.0);
+  for (int i = 0; i < particles_.numOwned && stateStride_ > 0; ++i)
+    for (int q = 0; q < statePoints_; ++q)
+      material(i).initialState(state_.data() + (static_cast<std::size_t>(i) * statePoints_ + q) * stateStride_);
+}
+
+void Model::commitState(const std::vector<double>& u) {
+  if (stateStride_ == 0) return;
+  std::vector<double> next = state_;  // all or nothing: an evaluation error commits nothing
+  impl_->commit(*this, u, next.data());
+  state_.swap(next);
+  impl_->invalidate();  // the kept linearisation of the matrix-free product belongs to the old state
+}
+
+void Model::setCommittedStates(const std::vector<double>& s) {
+  if (s.size() != state_.size())
+    throw std::invalid_argument("Model::setCommittedStates: " + std::to_string(s.size()) + " values for a state of " +
+                                std::to_string(state_.size()));
+  state_ = s;
+  impl_->invalidate();
 }
 
 void Model::enableDamage(const DamageSpec& d) {

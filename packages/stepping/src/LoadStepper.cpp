@@ -48,7 +48,31 @@ LoadFactorModel::LoadFactorModel(const Teuchos::RCP<Thyra::ModelEvaluator<double
 
 void LoadFactorModel::setLoadFactor(double lambda) {
   lambda_ = lambda;
-  if (listener_) listener_(lambda);
+  if (listener_) listener_(loadAt(lambda));
+}
+
+double loadOnPath(const std::vector<double>& path_, double s) {
+  if (path_.empty()) return s;
+  const int n = static_cast<int>(path_.size());
+  const double t = s * n;
+  const double r = std::round(t);
+  auto knot = [&](int k) { return k <= 0 ? 0.0 : path_[std::min(k, n) - 1]; };
+  if (std::abs(t - r) <= 1e-9) return knot(static_cast<int>(r));  // a corner: exactly its value
+  const int k = std::clamp(static_cast<int>(std::floor(t)), 0, n - 1);
+  return knot(k) + (t - k) * (knot(k + 1) - knot(k));
+}
+
+double LoadFactorModel::pathSlope(double s) const {
+  if (path_.empty()) return 1.0;
+  const int n = static_cast<int>(path_.size());
+  const int k = std::clamp(static_cast<int>(std::floor(s * n + 1e-9)), 0, n - 1);
+  return n * (path_[k] - (k == 0 ? 0.0 : path_[k - 1]));
+}
+
+std::vector<double> LoadFactorModel::pathStops(int segments) {
+  std::vector<double> s;
+  for (int k = 1; k < segments; ++k) s.push_back(static_cast<double>(k) / segments);
+  return s;
 }
 
 void LoadFactorModel::evalModelImpl(const MEB::InArgs<double>& in, const MEB::OutArgs<double>& out) const {
@@ -56,7 +80,7 @@ void LoadFactorModel::evalModelImpl(const MEB::InArgs<double>& in, const MEB::Ou
   args.setArgs(in, true);
   if (args.get_p(0).is_null()) {
     auto p = Thyra::createMember(getUnderlyingModel()->get_p_space(0));
-    Thyra::set_ele(0, lambda_, p.ptr());
+    Thyra::set_ele(0, loadAt(lambda_), p.ptr());
     args.set_p(0, p);
   }
   getUnderlyingModel()->evalModel(args, out);
@@ -68,18 +92,19 @@ void LoadFactorModel::loadDerivative(const Thyra::VectorBase<double>& x, Thyra::
   in.set_x(Teuchos::rcpFromRef(x));
   auto p = Thyra::createMember(m.get_p_space(0));
   auto out = m.createOutArgs();
+  const double load = loadAt(lambda_);
   if (out.supports(MEB::OUT_ARG_DfDp, 0).supports(MEB::DERIV_MV_BY_COL)) {
-    Thyra::set_ele(0, lambda_, p.ptr());
+    Thyra::set_ele(0, load, p.ptr());
     in.set_p(0, p);
     auto mv = Thyra::createMembers(m.get_f_space(), 1);
     out.set_DfDp(0, MEB::Derivative<double>(mv, MEB::DERIV_MV_BY_COL));
     m.evalModel(in, out);
     Thyra::copy(*mv->col(0), Teuchos::ptrFromRef(dfdl));
   } else {
-    const double h = 1e-6 * std::max(1.0, std::abs(lambda_));
+    const double h = 1e-6 * std::max(1.0, std::abs(load));
     auto fm = dfdl.clone_v();
     for (const double sign : {1.0, -1.0}) {
-      Thyra::set_ele(0, lambda_ + sign * h, p.ptr());
+      Thyra::set_ele(0, load + sign * h, p.ptr());
       in.set_p(0, p);
       auto o = m.createOutArgs();
       o.set_f(sign > 0 ? Teuchos::rcpFromRef(dfdl) : fm);
@@ -88,7 +113,8 @@ void LoadFactorModel::loadDerivative(const Thyra::VectorBase<double>& x, Thyra::
     Thyra::Vp_StV(Teuchos::ptrFromRef(dfdl), -1.0, *fm);
     Thyra::scale(0.5 / h, Teuchos::ptrFromRef(dfdl));
   }
-  if (listener_) listener_(lambda_);  // the model evaluated at other load factors
+  if (!path_.empty()) Thyra::scale(pathSlope(lambda_), Teuchos::ptrFromRef(dfdl));  // df/ds
+  if (listener_) listener_(load);  // the model evaluated at other load factors
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -377,10 +403,18 @@ NewtonResult LoadStepper::solveWithCutbacks(Thyra::VectorBase<double>& x, StepRe
   const double lastIncrement = state_.lastIncrement;
   NewtonResult nr;
   for (;;) {
-    const double target = std::min(1.0, lambda + increment);
+    double target = std::min(1.0, lambda + increment);
+    bool afterStop = false;  // the last converged state is a corner of the load path
+    for (double s : options_.stops) {
+      if (std::abs(s - lambda) <= 1e-12) afterStop = true;
+      if (s > lambda + 1e-12 && s < target - 1e-12) {
+        target = s;  // land on the corner
+        break;
+      }
+    }
     setLoadFactor(target);
     Thyra::copy(*xConverged_, Teuchos::ptrFromRef(x));
-    if (options_.predictor && lastIncrement > 0) {
+    if (options_.predictor && lastIncrement > 0 && !afterStop) {
       // x = xConverged + (target - lambda) / lastIncrement * (xConverged - xPrevious)
       const double a = (target - lambda) / lastIncrement;
       Thyra::V_StVpStV(Teuchos::ptrFromRef(x), 1.0 + a, *xConverged_, -a, *xPrevious_);

@@ -444,3 +444,46 @@ TEST(LoadStepper, FindsASnapBacksLimitLoadToTheToleranceWithoutTryingALoadThatFa
   for (const auto& n : rec.notes) noted = noted || n.find("cannot carry load factor 0.5 (snap-back)") != std::string::npos;
   EXPECT_TRUE(noted);
 }
+
+// A load path: the stepper's load factor is a pseudo-time, the model sees the piecewise-linear
+// load through 0, 1, 0.25, 1.5 (load, unload, reload past the first peak); steps land on the
+// corners, also when adaptive growth would step over one, and each accepted state is the model's
+// exact solution at the path's load factor.
+TEST(LoadStepper, FollowsALoadPathThroughItsCorners) {
+  const std::vector<double> knots{1.0, 0.25, 1.5};
+  EXPECT_EQ(loadOnPath(knots, 0.0), 0.0);
+  EXPECT_EQ(loadOnPath(knots, 1.0 / 3.0), 1.0);
+  EXPECT_EQ(loadOnPath(knots, 2.0 / 3.0), 0.25);
+  EXPECT_EQ(loadOnPath(knots, 1.0), 1.5);
+  EXPECT_NEAR(loadOnPath(knots, 0.5), 0.625, 1e-15);
+  EXPECT_EQ(loadOnPath({}, 0.375), 0.375);
+  EXPECT_EQ(LoadFactorModel::pathStops(3), (std::vector<double>{1.0 / 3.0, 2.0 / 3.0}));
+  for (const bool adaptive : {false, true}) {
+    SCOPED_TRACE(adaptive ? "adaptive" : "fixed steps");
+    Rig s({1.0, 2.0}, 0.5, {1.0, -3.0});
+    s.model->setLoadPath(knots);
+    EXPECT_NEAR(s.model->pathSlope(0.5), 3.0 * (0.25 - 1.0), 1e-15);
+    LoadStepperOptions o;
+    o.loadSteps = 2 * 3;  // two per segment
+    o.stops = LoadFactorModel::pathStops(3);
+    o.adaptive = adaptive;
+    o.maxIncrement = 0.3;
+    o.easyIterations = 10;  // grow after every step: the growth must stop at the corners
+    LoadStepper stepper(s.model, s.solve(), o);
+    Recorder rec;
+    stepper.addObserver(&rec);
+    ValueRecorder err([&](const Thyra::VectorBase<double>& x) {
+      return std::vector<double>{maxError(*s.springs, x, s.model->loadAt(s.model->loadFactor()))};
+    });
+    stepper.addObserver(&err);
+    ASSERT_TRUE(stepper.run()) << stepper.failure();
+    for (double stop : o.stops)
+      EXPECT_TRUE(std::any_of(rec.steps.begin(), rec.steps.end(), [&](double v) { return v == stop; }))
+          << "no step landed on the corner at pseudo-time " << stop;
+    EXPECT_NEAR(rec.steps.back(), 1.0, 1e-12);
+    for (const auto& v : err.values()) EXPECT_LT(v.second.front(), 1e-11) << "at pseudo-time " << v.first;
+    if (!adaptive) {
+      EXPECT_EQ(rec.steps.size(), 6u);
+    }
+  }
+}

@@ -124,6 +124,20 @@ class PeridynamicEvaluator : public Thyra::StateFuncModelEvaluatorBase<double> {
   /// tol of the largest one, if that one is in the softening band (s >= s_min; none otherwise),
   /// then detaches as breakBonds does. maxStretch receives the largest stretch.
   BreakReport breakMostStretched(const Thyra::VectorBase<double>& x, double tol, double& maxStretch);
+  // --- history (materials with internal variables, e.g. plasticity) ---
+  /// Whether some material has history. Evaluations never change it; commitHistory does.
+  bool hasHistory() const { return model_->hasHistory(); }
+  /// Makes the trial state at x (at the current load factor) the committed one: the
+  /// HistoryCommit of LoadStepper and ArcLengthStepper, and what a host that drives Newton
+  /// itself calls once per accepted step, before reading outputs. Collective (x's ghosts are
+  /// imported); does nothing without history.
+  void commitHistory(const Thyra::VectorBase<double>& x);
+  /// The committed states of the owned particles as (global id, its block of
+  /// Model::stateDoublesPerParticle doubles), for checkpoints.
+  std::vector<std::pair<long long, std::vector<double>>> ownedHistory() const;
+  /// Restores committed states (pairs of other ranks' particles are ignored; an owned particle
+  /// absent from the list keeps its state). Throws std::invalid_argument for a block of the wrong size.
+  void restoreHistory(const std::vector<std::pair<long long, std::vector<double>>>& states);
   // --- checkpoints (restart of long runs) ---
   /// Bonds of the owned particles broken so far, as (owned particle, neighbour) global ids.
   std::vector<std::pair<long long, long long>> ownedBrokenBonds() const;

@@ -105,6 +105,9 @@ struct ProblemSpec {
   std::vector<int> blockIndex() const;
   /// The materials in force: {material}, or the blocks' materials in their order.
   std::vector<MaterialSpec> materials() const;
+  /// Whether a material in force is plastic (the model then keeps a state per particle, and the
+  /// outputs carry the equivalent plastic strain and the yield flag).
+  bool plastic() const;
   /// The largest Young's modulus in force (for round-off floors and frozen-DOF stiffnesses).
   double stiffestModulus() const;
   /// A non-zero displacement is prescribed somewhere (otherwise the load is dead loads only).

@@ -52,7 +52,8 @@ struct SolverSettings {
   double adrTolerance = 1e-6;
   long long adrMaxIterations = 2000000;
   double adrMassSafety = 4.0;
-  int loadSteps = 10;
+  int loadSteps = 10;                // per segment of the load path
+  std::vector<double> loadPath;      // load factors after 0 (empty: 0 -> 1); LoadFactorModel::setLoadPath
   double tolerance = 1e-10;
   int maxIterations = 25;
   std::string lineSearch = "Full Step";

@@ -43,7 +43,7 @@ struct MaterialSpec {
   PlanarMode planar = PlanarMode::PlaneStrain;
   double E = 1.0;   // Young's modulus
   double nu = 0.0;  // Poisson's ratio, -1 < nu < 0.5
-  PlasticitySpec plastic;  // off: elastic
+  PlasticitySpec plastic{};  // off: elastic (braces: aggregate initialisers may leave it out without a warning)
 };
 
 template <int D>

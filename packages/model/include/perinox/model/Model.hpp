@@ -88,6 +88,13 @@ struct BondWork {
   // it when cacheFresh and reading it otherwise.
   double* cache = nullptr;
   bool cacheFresh = false;
+  // Materials with history: the committed state of particle i's points (stateStride doubles a
+  // point; point p of the stress-point effect at state + p * stateStride), or nullptr when no
+  // material has history. trial, when not null, is where an evaluation writes the trial state
+  // (only Model::commitState sets it, to state itself).
+  const double* state = nullptr;
+  double* trial = nullptr;
+  int stateStride = 0;
   // Sums over the family a repeated product's affine form may use (filled only for it):
   double Vsum = 0;             // sum_l V_l
   Vec VdYsum;                  // sum_l V_l dY_l
@@ -200,6 +207,8 @@ double micromodulusC(const MaterialSpec& m, double delta, double thickness);
 struct ParticleOutput {
   Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d cauchy = Eigen::Matrix3d::Zero();
+  double eqps = 0.0;     // equivalent plastic strain of the committed state (0 for elastic materials)
+  bool yielded = false;  // the last committed step flowed plastically at this particle
   bool valid = true;  // false if F was inverted (stress then written as zero)
 };
 
@@ -289,8 +298,32 @@ class Model {
   /// instead of O(family^2) (Jacobi scaling of smoothers on the matrix-free Jacobian).
   void addJacobianDiagonal(const std::vector<double>& u, double* d) const;
 
-  /// F and Cauchy stress of the owned particles at u.
+  /// F and Cauchy stress of the owned particles at u (from the committed state), with the
+  /// equivalent plastic strain and yield flag of the committed state.
   std::vector<ParticleOutput> outputs(const std::vector<double>& u) const;
+
+  // ---- History (materials with internal variables) ---------------------------------------------
+  // Every evaluation (residual, tangent, J v, diagonal) is a pure function of (u, committed
+  // state): it computes the trial state of each point from the committed one and keeps nothing.
+  // The committed state advances only through commitState.
+  /// Whether some material has history (otherwise no state is held and commitState does nothing).
+  bool hasHistory() const { return stateStride_ > 0; }
+  /// Doubles per evaluation point (the largest stateSize of the materials) and points per
+  /// particle (2 with stress points, else 1); a particle's block is their product.
+  int stateStride() const { return stateStride_; }
+  int statePointsPerParticle() const { return statePoints_; }
+  int stateDoublesPerParticle() const { return stateStride_ * statePoints_; }
+  /// The committed state of owned particle i (its points one after the other), nullptr without history.
+  const double* committedState(int ownedLocal) const {
+    return stateStride_ > 0 ? state_.data() + static_cast<std::size_t>(ownedLocal) * stateStride_ * statePoints_ : nullptr;
+  }
+  /// Makes the trial state at u (local displacements, as evaluate) the committed one: what a
+  /// load stepper does once per accepted step, and what a host driving the model itself calls.
+  /// Throws EvaluationError where the state cannot be evaluated (then nothing is committed).
+  void commitState(const std::vector<double>& u);
+  /// The committed states of the owned particles, in owned order (checkpoints), and its inverse.
+  const std::vector<double>& committedStates() const { return state_; }
+  void setCommittedStates(const std::vector<double>& s);
 
   /// Keeps only the bonds (i_local, j_local) for which keep returns true.
   template <class Pred>
@@ -311,6 +344,10 @@ class Model {
   std::vector<Material> materials_;
   LocalParticles particles_;
   std::unique_ptr<Impl> impl_;
+  void initHistory();
+  int stateStride_ = 0;
+  int statePoints_ = 1;
+  std::vector<double> state_;  // committed, per owned particle, per point
 };
 
 template <class Pred>

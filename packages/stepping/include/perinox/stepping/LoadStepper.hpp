@@ -51,6 +51,10 @@ struct StepRecord {
                                    // negative pivots at the converged point (-2: not computed)
 };
 
+/// The load factor of a load path (LoadFactorModel::setLoadPath) at pseudo-time s: 0 at s = 0,
+/// knots[k] at s = (k + 1) / knots.size(), linear between; s itself when knots is empty.
+double loadOnPath(const std::vector<double>& knots, double s);
+
 /// A model whose parameter p(0) is the load factor, evaluated at the load factor set here: every
 /// evaluation is given p(0) = lambda unless its caller gave one (NOX's group gives none).
 class LoadFactorModel : public Thyra::ModelEvaluatorDelegatorBase<double> {
@@ -59,6 +63,18 @@ class LoadFactorModel : public Thyra::ModelEvaluatorDelegatorBase<double> {
   explicit LoadFactorModel(const Teuchos::RCP<Thyra::ModelEvaluator<double>>& model);
   void setLoadFactor(double lambda);
   double loadFactor() const { return lambda_; }
+  /// A load path: the stepper's load factor becomes a pseudo-time s in [0, 1], and the model is
+  /// evaluated at the piecewise-linear load factor through 0 = knots... at s = 0 and knots[k] at
+  /// s = (k + 1) / knots.size() (e.g. {1, 0, 1.2}: load, unload, reload past the first peak).
+  /// Empty: the identity (s is the load factor). Pair it with LoadStepperOptions::stops =
+  /// pathStops(knots.size()) so that steps land on the path's corners.
+  void setLoadPath(std::vector<double> knots) { path_ = std::move(knots); }
+  /// The model's load factor at pseudo-time s, and d(load factor)/ds on the segment that starts at
+  /// or contains s.
+  double loadAt(double s) const { return loadOnPath(path_, s); }
+  double pathSlope(double s) const;
+  /// The corners of a path of `segments` segments: k / segments, k = 1 .. segments - 1.
+  static std::vector<double> pathStops(int segments);
   /// Called with every new load factor (a model that keeps its own, e.g. for diagnostics).
   void onLoadFactor(std::function<void(double)> listener) { listener_ = std::move(listener); }
   /// df/dlambda at x and the current load factor: the model's DfDp(0) if it supports it by
@@ -70,6 +86,7 @@ class LoadFactorModel : public Thyra::ModelEvaluatorDelegatorBase<double> {
                      const Thyra::ModelEvaluatorBase::OutArgs<double>& out) const override;
   double lambda_ = 0.0;
   std::function<void(double)> listener_;
+  std::vector<double> path_;
 };
 
 /// The stepping controls (validated; validParameters() documents them).
@@ -85,6 +102,9 @@ struct LoadStepperOptions {
                                   // prescribed motion, the tangent dx/dlambda: tangentPredictor)
   bool tangentPredictor = false;  // first step: x = x0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda
   double linearTolerance = 1e-12; // relative residual of the tangent predictor's linear solve
+  std::vector<double> stops;      // load factors in (0, 1), ascending, that steps land on exactly;
+                                  // the step after one starts from the converged state (no
+                                  // extrapolation across a corner of a load path)
   std::string keyPrefix;          // how messages name the keys ("Solver/" in a scene)
 
   /// The parameter list the options are read from: "Load Steps", "Max Cutbacks", "Min Increment",

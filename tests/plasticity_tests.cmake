@@ -1,0 +1,96 @@
+# J2 plasticity through the whole driver (docs/plasticity.md). Included by tests/CMakeLists.txt.
+
+# Uniaxial strain past yield against the closed form, in the middle of the body: the error is the
+# O(dx) boundary layer of the nonlocal model (2.3-2.9 % at 40 x 20, 1.2-1.6 % at 80 x 40, measured),
+# so the tolerance halves with the spacing (first-order convergence to the continuum solution).
+# Newton must converge quadratically with the algorithmic tangent.
+perinox_run_test(NAME verify_plastic_uniaxial_strain SCENE plastic_uniaxial_strain.xml
+  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plastic_us)
+add_test(NAME verify_plastic_uniaxial_strain_closed_form COMMAND ${Python3_EXECUTABLE}
+  ${CMAKE_CURRENT_SOURCE_DIR}/check_plastic_uniaxial_strain.py ${PERINOX_TEST_OUT}/verify_plastic_uniaxial_strain --rtol 0.035)
+set_tests_properties(verify_plastic_uniaxial_strain_closed_form PROPERTIES LABELS verification FIXTURES_REQUIRED plastic_us)
+perinox_run_test(NAME verify_plastic_uniaxial_strain_refined SCENE plastic_uniaxial_strain.xml
+  SETS "Discretization/Particles={80,40}"
+  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plastic_us_refined)
+add_test(NAME verify_plastic_uniaxial_strain_refined_closed_form COMMAND ${Python3_EXECUTABLE}
+  ${CMAKE_CURRENT_SOURCE_DIR}/check_plastic_uniaxial_strain.py ${PERINOX_TEST_OUT}/verify_plastic_uniaxial_strain_refined --rtol 0.0175)
+set_tests_properties(verify_plastic_uniaxial_strain_refined_closed_form PROPERTIES LABELS verification
+  FIXTURES_REQUIRED plastic_us_refined)
+
+# A load path: loading to 1 %, unloading to zero strain (reverse yielding on the way) and
+# reloading to 1.5 %, against the closed form replayed along the run's steps. Without the
+# committed state (every step from the virgin state) the final plastic strain would be half of it.
+perinox_run_test(NAME verify_plastic_load_path SCENE plastic_uniaxial_strain.xml
+  SETS "Solver/Load Path={1, 0, 1.5}" "Solver/Load Steps=4"
+  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plastic_path)
+add_test(NAME verify_plastic_load_path_closed_form COMMAND ${Python3_EXECUTABLE}
+  ${CMAKE_CURRENT_SOURCE_DIR}/check_plastic_uniaxial_strain.py ${PERINOX_TEST_OUT}/verify_plastic_load_path --rtol 0.035)
+set_tests_properties(verify_plastic_load_path_closed_form PROPERTIES LABELS verification FIXTURES_REQUIRED plastic_path)
+
+# Every solver path on the plastic tangent gives the same steps: matrix-free with the scalable
+# preconditioner, GMRES-ILU on the assembled Jacobian, Jacobian-free Newton-Krylov (its J v by
+# differences of the residual at the committed state), and two ranks (rank independence).
+foreach(variant
+    "scalable_mf|Solver/Linear Solver Preset=scalable|Solver/Jacobian=Matrix-Free"
+    "gmres_ilu|Solver/Linear Solver Preset=gmres-ilu"
+    "jfnk|Solver/Linear Solver Preset=gmres-ilu|Solver/Jacobian=Jacobian-Free")
+  string(REPLACE "|" ";" parts "${variant}")
+  list(POP_FRONT parts name)
+  perinox_run_test(NAME plastic_${name} SCENE plastic_uniaxial_strain.xml SETS ${parts}
+    CHECK --converged LABELS verification FIXTURE_SETUP plastic_${name})
+  add_test(NAME plastic_${name}_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-8 ${PERINOX_TEST_OUT}/verify_plastic_uniaxial_strain ${PERINOX_TEST_OUT}/plastic_${name})
+  set_tests_properties(plastic_${name}_compare PROPERTIES LABELS verification FIXTURES_REQUIRED "plastic_us;plastic_${name}")
+endforeach()
+perinox_run_test(NAME plastic_uniaxial_strain_np2 SCENE plastic_uniaxial_strain.xml NP 2
+  CHECK --converged LABELS verification FIXTURE_SETUP plastic_np2)
+add_test(NAME plastic_uniaxial_strain_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/verify_plastic_uniaxial_strain ${PERINOX_TEST_OUT}/plastic_uniaxial_strain_np2)
+set_tests_properties(plastic_uniaxial_strain_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "plastic_us;plastic_np2")
+
+# Checkpoints hold the committed state: a run resumed on one rank is bit for bit the run that
+# wrote the checkpoint; on two ranks (the state moves with its particle) it agrees to round-off.
+# The checkpoint is written mid-unloading (step 7 of 12 on the load path), where the state, not
+# the displacement, decides what comes next.
+set(PLASTIC_PATH "Solver/Load Path={1, 0, 1.5}" "Solver/Load Steps=4")
+perinox_run_test(NAME plastic_checkpoint_np1 SCENE plastic_uniaxial_strain.xml SETS ${PLASTIC_PATH}
+  ARGS --checkpoint-steps 7
+  CHECK --converged LABELS verification FIXTURE_SETUP plastic_checkpoint)
+perinox_run_test(NAME plastic_restart_np1 SCENE plastic_uniaxial_strain.xml SETS ${PLASTIC_PATH}
+  ARGS --restart ${PERINOX_TEST_OUT}/plastic_checkpoint_np1.checkpoint
+  CHECK --converged LABELS verification FIXTURE_REQUIRED plastic_checkpoint FIXTURE_SETUP plastic_restart_1)
+add_test(NAME plastic_restart_np1_exact COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_restart.py
+  --from-step 7 --exact ${PERINOX_TEST_OUT}/plastic_checkpoint_np1 ${PERINOX_TEST_OUT}/plastic_restart_np1)
+set_tests_properties(plastic_restart_np1_exact PROPERTIES LABELS verification FIXTURES_REQUIRED "plastic_checkpoint;plastic_restart_1")
+perinox_run_test(NAME plastic_restart_np2 SCENE plastic_uniaxial_strain.xml NP 2
+  SETS ${PLASTIC_PATH} "Discretization/Construction=Distributed"
+  ARGS --restart ${PERINOX_TEST_OUT}/plastic_checkpoint_np1.checkpoint
+  CHECK --converged LABELS verification FIXTURE_REQUIRED plastic_checkpoint FIXTURE_SETUP plastic_restart_2)
+add_test(NAME plastic_restart_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_restart.py
+  --from-step 7 --rtol 1e-10 ${PERINOX_TEST_OUT}/plastic_checkpoint_np1 ${PERINOX_TEST_OUT}/plastic_restart_np2)
+set_tests_properties(plastic_restart_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "plastic_checkpoint;plastic_restart_2")
+# A checkpoint without the states (written before the material had history, or damaged) is refused.
+add_test(NAME plastic_checkpoint_strip COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/strip_checkpoint_states.py
+  ${PERINOX_TEST_OUT}/plastic_checkpoint_np1.checkpoint ${PERINOX_TEST_OUT}/plastic_checkpoint_stripped)
+set_tests_properties(plastic_checkpoint_strip PROPERTIES LABELS "unit;badinput" FIXTURES_REQUIRED plastic_checkpoint
+  FIXTURES_SETUP plastic_stripped)
+perinox_bad_input(restart_without_material_state ${XML}/plastic_uniaxial_strain.xml "holds no material state for particle"
+  --set "Solver/Load Path={1, 0, 1.5}" --set "Solver/Load Steps=4" --restart ${PERINOX_TEST_OUT}/plastic_checkpoint_stripped)
+set_tests_properties(badinput_restart_without_material_state PROPERTIES FIXTURES_REQUIRED plastic_stripped)
+
+# Impossible plastic parameters: one sentence naming the key, nothing written.
+perinox_bad_sets(${XML}/plastic_uniaxial_strain.xml
+  plastic_zero_yield "'Material/Yield Stress' must be positive with Plasticity = J2" "Material/Yield Stress=0"
+  plastic_negative_hardening "'Material/Hardening Modulus' must be" "Material/Hardening Modulus=-1e9"
+  plastic_unknown_kind "Plasticity" "Material/Plasticity=J3")
+perinox_bad_input(plastic_voce_saturation_below_yield ${XML}/plastic_uniaxial_strain.xml
+  "'Material/Saturation Stress' must be at least 'Material/Yield Stress' with Hardening = Voce"
+  --set "Material/Hardening=Voce" --set "Material/Saturation Stress=1e8" --set "Material/Saturation Rate=10")
+perinox_bad_input(plastic_voce_zero_rate ${XML}/plastic_uniaxial_strain.xml
+  "'Material/Saturation Rate' must be positive with Hardening = Voce"
+  --set "Material/Hardening=Voce" --set "Material/Saturation Stress=4e8")
+perinox_bad_sets(${XML}/plastic_uniaxial_strain.xml
+  load_path_flat_segment "'Solver/Load Path' entry 2 (1) equals the load factor before it" "Solver/Load Path={1, 1, 0}"
+  load_path_starts_at_zero "'Solver/Load Path' entry 1 (0) equals the load factor before it" "Solver/Load Path={0, 1}")
+perinox_bad_input(load_path_with_arc_length ${XML}/plastic_uniaxial_strain.xml "'Solver/Load Path' needs 'Solver/Continuation' = Load Stepping"
+  --set "Solver/Load Path={1, 0}" --set "Solver/Continuation=Arc Length")
