@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "Observers.hpp"  // probeKey, probeComponents
 #include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
 #include "perinox/io/ExodusOutput.hpp"
@@ -57,11 +58,11 @@ ExodusRecorder::ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scen
     : ev_(ev), scene_(scene), res_(res) {
   const auto& d = ev.problem().disc;
   std::vector<std::string> globals{"load_factor"};
-  static const char* axis[3] = {"x", "y", "z"};
   for (const auto& p : scene.probes) {
     if (p.quantity == "Profile") continue;
-    for (int c = 0; c < d.dim; ++c)
-      globals.push_back((p.quantity == "Reaction" ? "reaction " : "displacement ") + p.name + " " + axis[c]);
+    std::string what = probeKey(p);
+    std::replace(what.begin(), what.end(), '_', ' ');
+    for (const std::string& c : probeComponents(p, d.dim)) globals.push_back(what + " " + p.name + " " + c);
   }
   const auto& comm = *ev.comm();
   perRank_ = ev.problem().distributed && comm.getSize() > 1;
@@ -131,7 +132,8 @@ void ExodusRecorder::record(const Thyra::VectorBase<double>& x, double lambda) {
   for (std::size_t k = 0; k < scene_.probes.size(); ++k) {
     if (scene_.probes[k].quantity == "Profile") continue;
     const auto& hist = k < res_.probes.size() ? res_.probes[k].second : decltype(res_.probes[k].second){};
-    for (int c = 0; c < D; ++c)
+    const int nc = static_cast<int>(probeComponents(scene_.probes[k], D).size());
+    for (int c = 0; c < nc; ++c)
       globals.push_back(!hist.empty() && static_cast<int>(hist.back().second.size()) > c ? hist.back().second[c] : 0.0);
   }
   if (perRank_) {  // this rank's file: its particles in owned order

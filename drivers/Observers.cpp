@@ -13,10 +13,36 @@ double wallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+std::string probeKey(const ProbeDef& probe) {
+  return probe.quantity == "Reaction" ? "reaction" : probe.quantity == "Plastic Strain" ? "plastic_strain" : "displacement";
+}
+
+std::vector<std::string> probeComponents(const ProbeDef& probe, int dim) {
+  if (probe.quantity == "Plastic Strain") return {"max", "mean"};
+  std::vector<std::string> c;
+  for (int k = 0; k < dim; ++k) c.push_back(std::string(1, "xyz"[k]));
+  return c;
+}
+
 std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe,
                                const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned) {
   const int D = ev.problem().dim();
   if (probe.quantity == "Reaction") return ev.reactionOn(x, probe.particles);
+  if (probe.quantity == "Plastic Strain") {
+    // The committed equivalent plastic strain: its largest value and its mean over the region.
+    const auto outs = ev.ownedOutputs(x);
+    double mx = 0.0, sum[2] = {0.0, 0.0}, all[2] = {0.0, 0.0};
+    for (int p : probe.particles)
+      if (const int l = ev.ownedIndex(p); l >= 0) {
+        mx = std::max(mx, outs[l].eqps);
+        sum[0] += outs[l].eqps;
+        sum[1] += 1;
+      }
+    double gmax = 0.0;
+    Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_MAX, mx, Teuchos::outArg(gmax));
+    Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, 2, sum, all);
+    return {gmax, all[0] / all[1]};
+  }
   std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
   for (int p : probe.particles)
     if (const int l = ev.ownedIndex(p); l >= 0) {

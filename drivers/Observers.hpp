@@ -44,6 +44,11 @@ std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& p
 double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref, const std::vector<double>& uOwned);
 
 /// The scene's probes, recorded at every accepted step (collective: every rank).
+/// A probe's value's key in summary.json ("displacement", "reaction", "plastic_strain") and the
+/// names of its components (x, y, z; max, mean for the plastic strain).
+std::string probeKey(const ProbeDef& probe);
+std::vector<std::string> probeComponents(const ProbeDef& probe, int dim);
+
 class ProbeRecorder final : public StepObserver {
  public:
   ProbeRecorder(const PeridynamicEvaluator& ev, const Scene& scene, RunResult& res) : ev_(ev), scene_(scene), res_(res) {}

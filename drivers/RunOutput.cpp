@@ -135,13 +135,12 @@ void mergeFieldParts(const Scene& scene, const std::string& staging, int nranks)
 std::string pathCsv(const Scene& scene, const RunResult& res) {
   std::ostringstream path;
   path << "step,load_factor";
-  const char* comp = "xyz";
   for (std::size_t k = 0; k < res.probes.size(); ++k)
     if (scene.probes[k].quantity != "Profile")
-      for (int c = 0; c < scene.problem->dim(); ++c) {
+      for (const std::string& c : probeComponents(scene.probes[k], scene.problem->dim())) {
         std::string name = res.probes[k].first;
         std::replace(name.begin(), name.end(), ' ', '_');
-        path << ',' << name << '_' << comp[c];
+        path << ',' << name << '_' << c;
       }
   path << '\n' << std::setprecision(15);
   for (std::size_t i = 0; i < res.pathLoadFactors.size(); ++i) {
@@ -435,7 +434,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   for (std::size_t k = 0; k < res.probes.size(); ++k) {
     if (scene.probes[k].quantity == "Profile") continue;
     json list = json::array();
-    const std::string key = scene.probes[k].quantity == "Reaction" ? "reaction" : "displacement";
+    const std::string key = probeKey(scene.probes[k]);
     for (const auto& [lf, v] : res.probes[k].second) list.push_back({{"load_factor", lf}, {key, v}});
     probes[res.probes[k].first] = list;
   }

@@ -72,11 +72,12 @@ def main(out):
     if probes:
         fig, ax = plt.subplots(figsize=(6, 4))
         for name, hist in probes.items():
-            key = "reaction" if hist and "reaction" in hist[0] else "displacement"
+            key = next((k for k in hist[0] if k != "load_factor"), "displacement") if hist else "displacement"
             lf = [h["load_factor"] for h in hist]
             ncomp = len(hist[0][key]) if hist else 0
             for c in range(ncomp):
-                ax.plot(lf, [h[key][c] for h in hist], marker="o", label=f"{name} {key}[{'xyz'[c]}]")
+                comp = ("max", "mean")[c] if key == "plastic_strain" else "xyz"[c]
+                ax.plot(lf, [h[key][c] for h in hist], marker="o", label=f"{name} {key}[{comp}]")
         ax.set_xlabel("load factor")
         ax.grid(True)
         ax.legend(fontsize=8)

@@ -15,7 +15,8 @@ the Cauchy stress tau / f. The states of the run's steps (summary.json, with a L
 unloading and reloading) are replayed in this order.
 Compared at the last step over the middle of the body (x in the middle half, y in the middle
 four fifths, away from the O(dx) boundary layer): the mean of sxx, syy, szz and eqps within R
-relative, and every particle within 2 R; every particle of the body must have yielded. The
+relative, and every particle within 2 R; every particle of the body must have yielded; the
+scene's "plastic strain" probe (mean over the middle) within R after every step. The
 parameters come from the run's scene.resolved.xml, the load factor from summary.json.
 """
 import argparse
@@ -55,6 +56,7 @@ summary = json.load(open(os.path.join(args.dir, "summary.json")))
 mu = E / (2 * (1 + nu))
 kappa = E / (3 * (1 - 2 * nu))
 p = alpha = 0.0
+alphas = []  # the closed form's alpha after every step
 for step in summary["steps"]:
     lam = step["load_factor"]
     f = 1 + g * lam
@@ -67,6 +69,7 @@ for step in summary["steps"]:
         p += sign * dp
         alpha += dp
         q -= sign * 3 * mu * dp
+    alphas.append(alpha)
 if alpha == 0.0:
     sys.exit("the scene stays elastic: nothing to check")
 ref = {"sxx": (kappa * e + 2 * q / 3) / f, "syy": (kappa * e - q / 3) / f, "szz": (kappa * e - q / 3) / f, "eqps": alpha}
@@ -94,6 +97,21 @@ for key, v in ref.items():
         fails.append(f"mean {key} over the middle {mean:.6e} differs from the closed form {v:.6e} by {em:.2e} (> {args.rtol})")
     if ex > 2 * args.rtol:
         fails.append(f"a particle's {key} differs from the closed form {v:.6e} by {ex:.2e} (> {2 * args.rtol})")
+# The "plastic strain" probe (Quantity = Plastic Strain over the middle): its mean after every
+# step, the committed history through the driver, against the replayed closed form.
+probe = summary["probes"].get("plastic strain", [])
+if len(probe) != len(alphas):
+    fails.append(f"the plastic strain probe has {len(probe)} values for {len(alphas)} steps")
+worst_probe = 0.0
+for k, (entry, ref_alpha) in enumerate(zip(probe, alphas)):
+    mx, mean = entry["plastic_strain"]
+    if mx < mean:
+        fails.append(f"step {k + 1}: the probe's largest plastic strain {mx} is below its mean {mean}")
+    err = abs(mean - ref_alpha) / ref_alpha if ref_alpha > 0 else abs(mean)
+    worst_probe = max(worst_probe, err)
+    if (ref_alpha > 0 and err > args.rtol) or (ref_alpha == 0 and mx != 0.0):
+        fails.append(f"step {k + 1}: mean plastic strain over the middle {mean:.6e}, closed form {ref_alpha:.6e}")
+line.append(f"probe mean per step: worst {worst_probe:.2e}")
 print(f"load factor {lam}, {len(middle)} particles in the middle; " + "; ".join(line))
 for m in fails:
     print("FAIL:", m)

@@ -238,7 +238,7 @@ def main():
                 name, at = name.split("@")
             hist = s["probes"][name]
             entry = hist[-1] if at is None else min(hist, key=lambda h: abs(h["load_factor"] - float(at)))
-            key = "reaction" if "reaction" in entry else "displacement"
+            key = next(k for k in entry if k != "load_factor")
             got, want = entry[key][int(comp)], float(value)
             print(f"probe {name}[{comp}] = {got:.8g}, reference {want:.8g}, rel. diff {abs(got - want) / abs(want):.3g}")
             if abs(got - want) > float(rtol) * abs(want):

@@ -53,7 +53,7 @@ def main():
             if other is None or len(other) != len(hist):
                 print(f"FAILED: probe {name} differs in length in {d}")
                 sys.exit(1)
-            key = "reaction" if "reaction" in hist[0] else "displacement"
+            key = next(k for k in hist[0] if k != "load_factor")
             scale = max(max(abs(v) for v in h[key]) for h in hist) or 1.0
             for h, o in zip(hist, other):
                 if abs(h["load_factor"] - o["load_factor"]) > a.load_factor_tol:

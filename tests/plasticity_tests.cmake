@@ -94,3 +94,31 @@ perinox_bad_sets(${XML}/plastic_uniaxial_strain.xml
   load_path_starts_at_zero "'Solver/Load Path' entry 1 (0) equals the load factor before it" "Solver/Load Path={0, 1}")
 perinox_bad_input(load_path_with_arc_length ${XML}/plastic_uniaxial_strain.xml "'Solver/Load Path' needs 'Solver/Continuation' = Load Stepping"
   --set "Solver/Load Path={1, 0}" --set "Solver/Continuation=Arc Length")
+perinox_bad_input(plastic_probe_on_elastic_scene ${XML}/plastic_uniaxial_strain.xml
+  "probe 'plastic strain' measures the plastic strain, but no material of the scene is plastic"
+  --set "Material/Plasticity=None")
+perinox_bad_input(ductile_without_critical_value ${XML}/plastic_uniaxial_strain.xml
+  "'Damage/Criterion' breaks bonds by plastic strain: give 'Damage/Critical Plastic Strain' > 0"
+  --set "Damage/Enabled=true" --set "Damage/Criterion=Plastic Strain")
+perinox_bad_input(ductile_value_without_criterion ${XML}/plastic_uniaxial_strain.xml
+  "'Damage/Critical Plastic Strain' is set but 'Damage/Criterion' is Stretch"
+  --set "Damage/Enabled=true" --set "Damage/Critical Plastic Strain=0.01")
+perinox_bad_input(ductile_without_plastic_material ${XML}/plastic_uniaxial_strain.xml
+  "breaks bonds by plastic strain (Critical Plastic Strain), but no material is plastic"
+  --set "Material/Plasticity=None" --set "Probes/plastic strain/Quantity=Displacement" --set "Damage/Enabled=true"
+  --set "Damage/Criterion=Plastic Strain" --set "Damage/Critical Plastic Strain=0.01")
+
+# A ductile crack: the plate with a hole in J2 steel, bonds broken by the plastic strain of their
+# ends. The crack runs through the ligaments from the hole to the free edges over several steps
+# (check_ductile_crack.py), and two ranks break the same bonds in the same steps (the ends'
+# plastic strains reach the ghosts by an Import) with the same probes to 1e-8.
+perinox_run_test(NAME ductile_plate_np1 SCENE plate_hole_ductile.xml
+  CHECK --converged LABELS verification FIXTURE_SETUP ductile_1)
+add_test(NAME ductile_plate_crack_path COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_ductile_crack.py
+  ${PERINOX_TEST_OUT}/ductile_plate_np1)
+set_tests_properties(ductile_plate_crack_path PROPERTIES LABELS verification FIXTURES_REQUIRED ductile_1)
+perinox_run_test(NAME ductile_plate_np2 SCENE plate_hole_ductile.xml NP 2
+  CHECK --converged LABELS verification FIXTURE_SETUP ductile_2)
+add_test(NAME ductile_plate_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-8 --same-damage ${PERINOX_TEST_OUT}/ductile_plate_np1 ${PERINOX_TEST_OUT}/ductile_plate_np2)
+set_tests_properties(ductile_plate_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "ductile_1;ductile_2")

@@ -22,7 +22,26 @@ DamageBookkeeping::DamageBookkeeping(Teuchos::RCP<const Teuchos::Comm<int>> comm
 
 BreakReport DamageBookkeeping::breakBonds(const std::vector<double>& u, const double* xFree) {
   BreakReport rep;
-  long long local = model_.breakBonds(u);
+  long long local = 0;
+  if (model_.ductileCriterion()) {
+    // The ends' plastic strains, owned ones from the trial state at u, ghosts' by an Import
+    // (component 0 of the DOF vectors), so both ranks of a bond decide alike.
+    const int D = problem_.dim();
+    const LocalParticles& lp = model_.particles();
+    const std::vector<double> mine = model_.trialPlasticStrain(u);
+    TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
+    {
+      auto od = owned.getDataNonConst();
+      for (int i = 0; i < lp.numOwned; ++i) od[i * D] = mine[i];
+    }
+    ghosted.doImport(owned, *dofs_.allImport, Tpetra::INSERT);
+    std::vector<double> eqps(lp.size(), 0.0);
+    auto gd = ghosted.getData();
+    for (int l = 0; l < lp.size(); ++l) eqps[l] = l < lp.numOwned ? mine[l] : gd[l * D];
+    local = model_.breakBonds(u, eqps);
+  } else {
+    local = model_.breakBonds(u);
+  }
   Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, local, Teuchos::outArg(rep.brokenBonds));
   detachSingular(xFree, rep);
   return rep;

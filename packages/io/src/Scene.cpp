@@ -306,7 +306,8 @@ ParameterList probeTemplate() {
   ParameterList r = onRegion("probe", "region to probe");
   setChoice(r, "Quantity", "Displacement",
             {{"Displacement", "mean over the region, per step"}, {"Reaction", "sum of reaction forces, per step"},
-             {"Profile", "every particle of the region at the end, to profile_<name>.csv"}});
+             {"Profile", "every particle of the region at the end, to profile_<name>.csv"},
+             {"Plastic Strain", "the largest and the mean equivalent plastic strain over the region, per step (needs a plastic material)"}});
   return r;
 }
 
@@ -332,6 +333,8 @@ void materialKeys(ParameterList& m, const std::string& lead = "") {
   setNumber(m, "Saturation Rate", 0.0, lead + "delta of Voce hardening (positive; dimensionless, per unit equivalent plastic strain)", nonNegative());
 }
 
+enum class BreakCriterion { Stretch, PlasticStrain, Either };
+
 void damageLawKeys(ParameterList& dm, const std::string& lead = "") {
   dm.set("Critical Stretch", 0.002, lead + "s_cr: bonds with stretch >= s_cr carry no force and break after the step");
   dm.set("Softening Start", 0.0015, lead + "s_min: bond forces soften from here (0 < s_min < s_cr)");
@@ -339,6 +342,11 @@ void damageLawKeys(ParameterList& dm, const std::string& lead = "") {
   setChoice<DamageSpec::Softening>(dm, "Softening", "Paper",
             {{"Paper", DamageSpec::Softening::Paper, "seed 000 eq. 48: T_s jumps by 1/2 (1 - tanh beta) at s_min and s_cr"},
              {"Continuous", DamageSpec::Softening::Continuous, "the tanh rescaled to be exactly 1 at s_min and 0 at s_cr"}}, lead.empty() ? "" : lead + "softening: ");
+  setChoice<BreakCriterion>(dm, "Criterion", "Stretch",
+            {{"Stretch", BreakCriterion::Stretch, "bonds soften from Softening Start and break at Critical Stretch"},
+             {"Plastic Strain", BreakCriterion::PlasticStrain, "ductile: a bond breaks when the mean equivalent plastic strain of its ends reaches Critical Plastic Strain (no softening)"},
+             {"Either", BreakCriterion::Either, "both criteria"}}, lead.empty() ? "" : lead + "criterion: ");
+  setNumber(dm, "Critical Plastic Strain", 0.0, lead + "the ductile criterion's equivalent plastic strain (Criterion = Plastic Strain or Either)", nonNegative());
 }
 
 /// One entry of Blocks: a block's own material, G and damage law (each key not given takes the
@@ -1218,6 +1226,15 @@ DamageSpec damageLawFrom(const Section& dm, const std::string& file, const std::
     fail(file, key + "Softening Start' and " + key + "Critical Stretch' must satisfy 0 < s_min < s_cr");
   ds.beta = dm.ranged<double>("Beta");
   ds.softening = dm.choice<DamageSpec::Softening>("Softening");
+  const BreakCriterion c = dm.choice<BreakCriterion>("Criterion");
+  const double crit = dm.ranged<double>("Critical Plastic Strain");
+  ds.stretchCriterion = c != BreakCriterion::PlasticStrain;
+  if (c == BreakCriterion::Stretch) {
+    if (crit > 0) fail(file, key + "Critical Plastic Strain' is set but " + key + "Criterion' is Stretch; set it to Plastic Strain or Either");
+  } else {
+    if (!(crit > 0)) fail(file, key + "Criterion' breaks bonds by plastic strain: give " + key + "Critical Plastic Strain' > 0");
+    ds.criticalPlasticStrain = crit;
+  }
   return ds;
 }
 
@@ -1705,6 +1722,8 @@ void readProbes(SceneBuild& b) {
     const std::string name = pr.list.name(it);
     const Section p = pr.entry(name, "Probes");
     b.sc.probes.push_back({name, p.get<std::string>("Quantity"), b.region("Probes/" + name + "/Region", p.get<std::string>("Region"))});
+    if (b.sc.probes.back().quantity == "Plastic Strain" && !b.problem.plastic())
+      fail(b.file, "probe '" + name + "' measures the plastic strain, but no material of the scene is plastic (Material/Plasticity = J2)");
   }
 }
 

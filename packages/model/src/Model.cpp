@@ -782,6 +782,8 @@ void Model::setCommittedStates(const std::vector<double>& s) {
 void Model::enableDamage(const DamageSpec& d) {
   if (!(d.sMin > 0 && d.sCr > d.sMin && d.beta > 0))
     throw std::invalid_argument("damage needs 0 < s_min < s_cr and beta > 0");
+  if (d.criticalPlasticStrain > 0 && stateStride_ == 0)
+    throw std::invalid_argument("the damage law breaks bonds by plastic strain (Critical Plastic Strain), but no material is plastic");
   damage_ = d;
   damageLaws_.clear();
   impl_->setDamage(this);
@@ -793,6 +795,9 @@ void Model::enableDamage(const std::vector<DamageSpec>& perMaterial) {
   for (const DamageSpec& d : perMaterial)
     if (!(d.sMin > 0 && d.sCr > d.sMin && d.beta > 0))
       throw std::invalid_argument("damage needs 0 < s_min < s_cr and beta > 0");
+  for (const DamageSpec& d : perMaterial)
+    if (d.criticalPlasticStrain > 0 && stateStride_ == 0)
+      throw std::invalid_argument("a damage law breaks bonds by plastic strain (Critical Plastic Strain), but no material is plastic");
   damage_ = perMaterial.front();
   damageLaws_ = perMaterial;
   impl_->setDamage(this);
@@ -807,12 +812,49 @@ const DamageSpec& Model::bondDamage(int i, int j) const {
   return da.sCr < db.sCr || (da.sCr == db.sCr && a < b) ? da : db;
 }
 
-long long Model::breakBonds(const std::vector<double>& u) {
+long long Model::breakBonds(const std::vector<double>& u, const std::vector<double>& eqps) {
   if (!damage_) return 0;
-  if (damageLaws_.empty() || particles_.material.empty()) return breakBondsAbove(u, damage_->sCr);
+  if (eqps.size() != static_cast<std::size_t>(particles_.size()))
+    throw std::invalid_argument("Model::breakBonds: " + std::to_string(eqps.size()) + " plastic strains for " +
+                                std::to_string(particles_.size()) + " local particles");
   long long broken = 0;
   removeBondsIf([&](int i, int j) {
-    const bool brk = bondStretch(u, i, j) >= bondDamage(i, j).sCr;
+    const DamageSpec& d = bondDamage(i, j);
+    const bool brk = (d.stretchCriterion && bondStretch(u, i, j) >= d.sCr) ||
+                     (d.criticalPlasticStrain > 0 && 0.5 * (eqps[i] + eqps[j]) >= d.criticalPlasticStrain);
+    broken += brk && particles_.globalId[i] < particles_.globalId[j];
+    return !brk;
+  });
+  return broken;
+}
+
+bool Model::ductileCriterion() const {
+  if (!damage_) return false;
+  if (damage_->criticalPlasticStrain > 0) return true;
+  for (const DamageSpec& d : damageLaws_)
+    if (d.criticalPlasticStrain > 0) return true;
+  return false;
+}
+
+std::vector<double> Model::trialPlasticStrain(const std::vector<double>& u) const {
+  std::vector<double> out(particles_.numOwned, 0.0);
+  if (stateStride_ == 0) return out;
+  std::vector<double> trial = state_;
+  impl_->commit(*this, u, trial.data());
+  for (int i = 0; i < particles_.numOwned; ++i)
+    for (int q = 0; q < statePoints_; ++q)
+      out[i] = std::max(out[i], material(i).equivalentPlasticStrain(
+                                    trial.data() + (static_cast<std::size_t>(i) * statePoints_ + q) * stateStride_));
+  return out;
+}
+
+long long Model::breakBonds(const std::vector<double>& u) {
+  if (!damage_) return 0;
+  if ((damageLaws_.empty() || particles_.material.empty()) && damage_->stretchCriterion) return breakBondsAbove(u, damage_->sCr);
+  long long broken = 0;
+  removeBondsIf([&](int i, int j) {
+    const DamageSpec& d = bondDamage(i, j);
+    const bool brk = d.stretchCriterion && bondStretch(u, i, j) >= d.sCr;
     broken += brk && particles_.globalId[i] < particles_.globalId[j];
     return !brk;
   });

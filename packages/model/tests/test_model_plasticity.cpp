@@ -214,3 +214,52 @@ TEST(ModelPlasticity, PlasticBlockBesideElasticBlock) {
   }
   EXPECT_LE(err, 1e-6 * s.K.cwiseAbs().maxCoeff());
 }
+
+// Ductile failure: after a step, a bond breaks when the mean equivalent plastic strain of its two
+// ends (of the trial state at u, nothing committed) reaches the critical value, each bond once,
+// and no bond softens by stretch when the stretch criterion is off.
+TEST(ModelPlasticity, DuctileCriterionBreaksByPlasticStrain) {
+  const Discretization d = testutil::smallLattice(2, 2.015, 8);
+  const int n = d.size();
+  const MaterialSpec mat = plastic(2, PlanarMode::PlaneStrain, MaterialKind::Hencky);
+  auto makeModel = [&](double crit) {
+    auto m = std::make_unique<Model>(mat, localParticles(d, 0, n));
+    m->enableCorrespondence();
+    DamageSpec ds;
+    ds.stretchCriterion = false;
+    ds.criticalPlasticStrain = crit;
+    m->enableDamage(ds);
+    return m;
+  };
+  const auto u = field(d, 0.004, 0.0015, 13);
+  auto probe = makeModel(1.0);
+  const std::vector<double> committed = probe->committedStates();
+  const std::vector<double> eqps = probe->trialPlasticStrain(u);
+  EXPECT_EQ(probe->committedStates(), committed) << "trialPlasticStrain committed something";
+  const double lo = *std::min_element(eqps.begin(), eqps.end()), hi = *std::max_element(eqps.begin(), eqps.end());
+  ASSERT_GT(hi, lo);
+  // Stretch softening is off: the forces are those of the model without damage.
+  Model plain(mat, localParticles(d, 0, n));
+  plain.enableCorrespondence();
+  EXPECT_EQ(residual(*probe, d, u), residual(plain, d, u));
+  const double crit = 0.5 * (lo + hi);
+  long long expected = 0;  // bonds (each once) whose ends' mean reaches crit
+  for (int i = 0; i < n; ++i)
+    for (auto q = probe->particles().famOffset[i]; q < probe->particles().famOffset[i + 1]; ++q) {
+      const int j = probe->particles().famIndex[q];
+      if (i < j && 0.5 * (eqps[i] + eqps[j]) >= crit) ++expected;
+    }
+  ASSERT_GT(expected, 0);
+  auto model = makeModel(crit);
+  EXPECT_EQ(model->breakBonds(u, eqps), expected);
+  EXPECT_EQ(model->breakBonds(u, eqps), 0);  // broken for good, once
+  auto none = makeModel(hi * 1.01);
+  EXPECT_EQ(none->breakBonds(u, eqps), 0);
+  // A ductile law needs a plastic material.
+  MaterialSpec elastic = mat;
+  elastic.plastic = PlasticitySpec{};
+  Model m2(elastic, localParticles(d, 0, n));
+  DamageSpec ds;
+  ds.criticalPlasticStrain = 0.1;
+  EXPECT_THROW(m2.enableDamage(ds), std::invalid_argument);
+}

@@ -174,11 +174,16 @@ struct DamageSpec {
   double sCr = 0.002;
   double beta = 3.0;
   enum class Softening { Paper, Continuous } softening = Softening::Paper;
+  /// Ductile failure: > 0, a bond also breaks (after a converged step) when the mean of the
+  /// equivalent plastic strains of its two ends, at the step's trial state, reaches this.
+  double criticalPlasticStrain = 0.0;
+  /// false: the stretch neither softens nor breaks bonds (only criticalPlasticStrain does).
+  bool stretchCriterion = true;
 };
 
 /// T_s(s) and dT_s/ds (dT_s/ds uses the corrected derivative of FORMULATION.md).
 inline void bondSoftening(const DamageSpec& d, double s, double& Ts, double& dTs) {
-  if (s < d.sMin) {
+  if (s < d.sMin || !d.stretchCriterion) {
     Ts = 1.0;
     dTs = 0.0;
   } else if (s < d.sCr) {
@@ -251,6 +256,15 @@ class Model {
   /// Returns the number of bonds broken, each counted on the rank owning its lower-id end
   /// (so a sum over ranks counts every bond once).
   long long breakBonds(const std::vector<double>& u);
+  /// The same, with the ductile criterion (DamageSpec::criticalPlasticStrain) on the equivalent
+  /// plastic strains of the local particles (owned and ghosts, as trialPlasticStrain gives them
+  /// on every rank; both ends of a bond must see the same two values).
+  long long breakBonds(const std::vector<double>& u, const std::vector<double>& plasticStrain);
+  /// Per owned particle, the equivalent plastic strain of the trial state at u (the largest of its
+  /// stress points'); zeros without history. Nothing is committed.
+  std::vector<double> trialPlasticStrain(const std::vector<double>& u) const;
+  /// Whether some damage law breaks bonds by plastic strain.
+  bool ductileCriterion() const;
   /// The same with another threshold: breaks every intact bond with stretch >= sBreak.
   long long breakBondsAbove(const std::vector<double>& u, double sBreak);
   /// The largest stretch of an intact bond of an owned, attached particle at u (-inf if none).
