@@ -137,3 +137,18 @@ set_tests_properties(plastic_arc_length_closed_form PROPERTIES LABELS verificati
 add_test(NAME plastic_arc_length_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-4 --final-only --load-factor-tol 1e-9 ${PERINOX_TEST_OUT}/verify_plastic_uniaxial_strain ${PERINOX_TEST_OUT}/plastic_arc_length)
 set_tests_properties(plastic_arc_length_compare PROPERTIES LABELS verification FIXTURES_REQUIRED "plastic_us;plastic_arc")
+
+# The 1D bar pulled, released past reverse yield and pulled again (xml/plastic_bar.xml): the
+# reaction at every step against the closed form of uniaxial stress to 1e-8 (the stress-point bar
+# keeps the strain uniform, so only Newton's tolerance separates them), the plastic strain of
+# every particle, and two ranks against one.
+perinox_run_test(NAME verify_plastic_bar SCENE plastic_bar.xml
+  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plastic_bar)
+add_test(NAME verify_plastic_bar_closed_form COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_plastic_bar.py
+  ${PERINOX_TEST_OUT}/verify_plastic_bar)
+set_tests_properties(verify_plastic_bar_closed_form PROPERTIES LABELS verification FIXTURES_REQUIRED plastic_bar)
+perinox_run_test(NAME plastic_bar_np2 SCENE plastic_bar.xml NP 2
+  CHECK --converged LABELS verification FIXTURE_SETUP plastic_bar_2)
+add_test(NAME plastic_bar_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/verify_plastic_bar ${PERINOX_TEST_OUT}/plastic_bar_np2)
+set_tests_properties(plastic_bar_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "plastic_bar;plastic_bar_2")
