@@ -152,3 +152,18 @@ perinox_run_test(NAME plastic_bar_np2 SCENE plastic_bar.xml NP 2
 add_test(NAME plastic_bar_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
   --rtol 1e-10 ${PERINOX_TEST_OUT}/verify_plastic_bar ${PERINOX_TEST_OUT}/plastic_bar_np2)
 set_tests_properties(plastic_bar_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "plastic_bar;plastic_bar_2")
+
+# The other return maps through the whole solver: plane stress (F33 solved in the return) along
+# the load path, on one and two ranks; small strain with Voce hardening. Newton quadratic in every step.
+perinox_run_test(NAME plastic_plane_stress_load_path SCENE plastic_uniaxial_strain.xml
+  SETS "Material/Plane=Plane Stress" ${PLASTIC_PATH}
+  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plastic_ps_1)
+perinox_run_test(NAME plastic_plane_stress_load_path_np2 SCENE plastic_uniaxial_strain.xml NP 2
+  SETS "Material/Plane=Plane Stress" ${PLASTIC_PATH}
+  CHECK --converged LABELS verification FIXTURE_SETUP plastic_ps_2)
+add_test(NAME plastic_plane_stress_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-10 ${PERINOX_TEST_OUT}/plastic_plane_stress_load_path ${PERINOX_TEST_OUT}/plastic_plane_stress_load_path_np2)
+set_tests_properties(plastic_plane_stress_np2_compare PROPERTIES LABELS "verification;mpi" FIXTURES_REQUIRED "plastic_ps_1;plastic_ps_2")
+perinox_run_test(NAME plastic_small_strain_voce SCENE plastic_uniaxial_strain.xml
+  SETS "Material/Model=Small Strain" "Material/Hardening=Voce" "Material/Saturation Stress=4e8" "Material/Saturation Rate=50"
+  CHECK --converged --quadratic LABELS verification)
