@@ -4,7 +4,8 @@
     python3 drivers/plot_result.py OUTDIR
 
 Writes OUTDIR/deformed.png (real particles on the deformed configuration, coloured by
-sigma_xx and by |u|) and OUTDIR/probes.png (probe values against the load factor).
+sigma_xx and by |u|, and by the damage index and the equivalent plastic strain where the run has
+them) and OUTDIR/probes.png (probe values against the load factor).
 """
 import csv
 import json
@@ -39,6 +40,8 @@ def main(out):
     panels = [("sxx", "Cauchy stress sigma_xx"), ("umag", "|u|")]
     if any(r.get("damage", 0) > 0 for r in real):
         panels.append(("damage", "damage index phi"))
+    if any(r.get("eqps", 0) > 0 for r in real):  # a plastic material that has yielded
+        panels.append(("eqps", "equivalent plastic strain"))
     n = len(panels)
     if slender:
         fig, axes = plt.subplots(n, 1, figsize=(12, 3.3 * n))
@@ -51,7 +54,7 @@ def main(out):
             cs = [(r["ux"] ** 2 + r["uy"] ** 2 + r["uz"] ** 2) ** 0.5 for r in real]
         else:
             cs = [r[key] for r in real]
-        kw = {"vmin": 0.0, "vmax": max(cs) or 1.0} if key == "damage" else {}
+        kw = {"vmin": 0.0, "vmax": max(cs) or 1.0} if key in ("damage", "eqps") else {}
         sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet", **kw)
         if fict:
             ax.scatter([r["x"] + r["ux"] for r in fict], [r["y"] + r["uy"] for r in fict], c="0.6", s=8, marker="s")

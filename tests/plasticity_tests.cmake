@@ -167,3 +167,11 @@ set_tests_properties(plastic_plane_stress_np2_compare PROPERTIES LABELS "verific
 perinox_run_test(NAME plastic_small_strain_voce SCENE plastic_uniaxial_strain.xml
   SETS "Material/Model=Small Strain" "Material/Hardening=Voce" "Material/Saturation Stress=4e8" "Material/Saturation Rate=50"
   CHECK --converged --quadratic LABELS verification)
+
+# The pictures of a plastic run with damage: deformed.png gains the damage and the plastic-strain
+# panels (drivers/plot_result.py), and the plot script must not fail on the eqps columns.
+perinox_mpi_command(mpi_plots_plastic 1)
+add_test(NAME plots_drawn_plastic COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/plots_drawn_plastic
+  --converged --png deformed.png probes.png -- ${mpi_plots_plastic} $<TARGET_FILE:perinox> run
+  ${PROJECT_SOURCE_DIR}/xml/plastic_uniaxial_strain.xml --output ${PERINOX_TEST_OUT}/plots_drawn_plastic --quiet)
+set_tests_properties(plots_drawn_plastic PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS verification)
