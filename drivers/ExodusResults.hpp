@@ -24,7 +24,7 @@ class ExodusRecorder final : public StepObserver {
   /// before this one).
   ExodusRecorder(const PeridynamicEvaluator& ev, const Scene& scene, const RunResult& res, const std::string& dir);
   ~ExodusRecorder() override;
-  void accepted(const StepInfo& s) override { record(s.x, loadOnPath(scene_.solver.loadPath, s.loadFactor)); }
+  void accepted(const StepInfo& s) override { record(s.x, s.loadFactor); }
   /// Collective: appends the state x at load factor lambda as a time step.
   void record(const Thyra::VectorBase<double>& x, double lambda);
   int steps() const { return steps_; }

@@ -81,8 +81,8 @@ void ConsoleLines::accepted(const StepInfo& s) {
   CoutFormat keep;
   const auto& nr = s.result;
   const auto& rec = s.record;
-  std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(4)
-            << loadOnPath(path_, s.loadFactor) << (adr_ ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
+  std::cout << "step " << std::setw(3) << rec.step << "  load " << std::fixed << std::setprecision(4) << s.loadFactor
+            << (adr_ ? "  adr " : "  newton ") << std::setw(2) << nr.iterations
             << (adr_ ? "  e1, e2 " : (nr.reactionNormalised ? "  |R|/|reaction| " : "  |R|/|f_ext| "))
             << std::scientific << std::setprecision(3)
             << (nr.residuals.empty() ? 0.0 : (adr_ ? nr.residuals.front() : nr.residuals.back())) << (adr_ ? ", " : "")

@@ -56,8 +56,7 @@ class ProbeRecorder final : public StepObserver {
     const auto u = ev_.ownedDisplacements(s.x);
     for (std::size_t k = 0; k < scene_.probes.size(); ++k)
       if (scene_.probes[k].quantity != "Profile")
-        res_.probes[k].second.push_back(
-            {loadOnPath(scene_.solver.loadPath, s.loadFactor), probeValue(ev_, scene_.probes[k], s.x, u)});
+        res_.probes[k].second.push_back({s.loadFactor, probeValue(ev_, scene_.probes[k], s.x, u)});
   }
 
  private:
@@ -70,8 +69,7 @@ class ProbeRecorder final : public StepObserver {
 /// stepper's notes (cut-backs, stalls, damage), on rank 0 unless quiet.
 class ConsoleLines final : public StepObserver {
  public:
-  ConsoleLines(const Scene& scene, bool speak)
-      : adr_(scene.solver.method == "ADR"), speak_(speak), path_(scene.solver.loadPath) {}
+  ConsoleLines(const Scene& scene, bool speak) : adr_(scene.solver.method == "ADR"), speak_(speak) {}
   void note(const std::string& line) override {
     if (speak_) std::cout << line << "\n";
   }
@@ -79,7 +77,6 @@ class ConsoleLines final : public StepObserver {
 
  private:
   bool adr_, speak_;
-  std::vector<double> path_;  // Solver/Load Path: the line shows the load factor, not the pseudo-time
 };
 
 /// 'Solver/Stability Check': the tangent's negative pivots at each converged step; an unstable

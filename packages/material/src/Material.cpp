@@ -11,7 +11,7 @@
 // virtual calls; this runs for every particle in every Newton iteration.
 #include "perinox/material/Material.hpp"
 
-#include "Spectral.hpp"
+#include "LawKernels.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -26,6 +26,8 @@ double lameMu(const MaterialSpec& s) { return s.E / (2.0 * (1.0 + s.nu)); }
 namespace {
 
 using detail::logDividedDifference;
+using detail::smallStrainTangent;
+using detail::throwDimMismatch;
 using detail::SymEig;
 using detail::symEig;
 template <int N>
@@ -103,25 +105,6 @@ MatD<N> smallStrainStress(const MatD<N>& F, double lambda, double mu) {
   MatD<N> sigma = (2.0 * mu) * eps;
   sigma.diagonal().array() += lambda * eps.trace();
   return sigma;
-}
-
-/// A(ab,cd) = lambda d_ab d_cd + mu (d_ac d_bd + d_ad d_bc).
-template <int N>
-void smallStrainTangent(double lambda, double mu, TangentD<N>& A) {
-  A.setZero();
-  for (int a = 0; a < N; ++a) {
-    for (int b = 0; b < N; ++b) {
-      A(a * N + b, b * N + a) += mu;
-      A(a * N + b, a * N + b) += mu;
-    }
-    for (int c = 0; c < N; ++c) A(a * N + a, c * N + c) += lambda;
-  }
-}
-
-[[noreturn]] void throwDimMismatch(int D, int dim) {
-  throw std::logic_error("perinox::Material: called with a " + std::to_string(D) +
-                         "D deformation gradient but the material was built for dim = " +
-                         std::to_string(dim) + ".");
 }
 
 }  // namespace

@@ -22,7 +22,7 @@
 // the tangent: A2 = A(ab, cd) - A(ab, 33) A(33, cd) / A(33, 33).
 #include "perinox/material/Material.hpp"
 
-#include "Spectral.hpp"
+#include "LawKernels.hpp"
 
 #include <cmath>
 #include <limits>
@@ -86,6 +86,24 @@ bool scalarReturn(const PlasticitySpec& p, double q, double alpha, double M, Sca
   return false;
 }
 
+/// The radial return of a 3D deviator d (log strain or strain) with Mises stress q = sqrt(6) mu |d|:
+/// the deviator is scaled by theta, and the consistent tangent gains cN (n : deps) n, n = d / |d|.
+struct Radial {
+  ScalarReturn r;
+  double theta = 1.0;
+  double cN = 0.0;
+};
+
+bool radialReturn(const PlasticitySpec& p, double q, double alpha, double mu, Radial& out) {
+  out = Radial{};
+  if (!scalarReturn(p, q, alpha, 3.0 * mu, out.r)) return false;
+  if (out.r.active) {
+    out.theta = 1.0 - 3.0 * mu * out.r.x / q;
+    out.cN = 6.0 * mu * mu * (out.r.x / q - 1.0 / (3.0 * mu + out.r.slope));
+  }
+  return true;
+}
+
 /// One 3D material point: Kirchhoff stress (finite) or Cauchy stress (small strain) in `tau`,
 /// P, J = det F, and the trial state [c or eps_p (11,12,13,22,23,33), alpha, active].
 struct Point3 {
@@ -110,6 +128,18 @@ void symTo6(const Mat3& m, double* s) {
   s[5] = m(2, 2);
 }
 
+/// The trial state [tensor (6), alpha, flag]: after flow, `flowed` (the new c or eps_p) and the
+/// increased alpha; without flow, the committed tensor and alpha.
+void writeState(const Radial& rr, const double* st, const Mat3& flowed, double* out) {
+  if (rr.r.active) {
+    symTo6(flowed, out);
+    out[6] = st[6] + rr.r.x;
+  } else {
+    for (int k = 0; k < 7; ++k) out[k] = st[k];
+  }
+  out[7] = rr.r.active ? 1.0 : 0.0;
+}
+
 /// Finite-strain J2 at a 3D point. `st` is the committed state (8 doubles).
 bool henckyJ2(const Mat3& F, const double* st, double kappa, double mu, const PlasticitySpec& p,
               Point3& out, Mat9* A) {
@@ -129,11 +159,9 @@ bool henckyJ2(const Mat3& F, const double* st, double kappa, double mu, const Pl
   const double tr = std::log(J) + 0.5 * std::log(detc);
   const Vec3 d = e.array() - e.sum() / 3.0;
   const double nd = d.norm();
-  const double q = std::sqrt(6.0) * mu * nd;
-  ScalarReturn r;
-  if (!scalarReturn(p, q, alpha, 3.0 * mu, r)) return false;
-  const double theta = r.active ? 1.0 - 3.0 * mu * r.x / q : 1.0;
-  const double cN = r.active ? 6.0 * mu * mu * (r.x / q - 1.0 / (3.0 * mu + r.slope)) : 0.0;
+  Radial rr;
+  if (!radialReturn(p, std::sqrt(6.0) * mu * nd, alpha, mu, rr)) return false;
+  const double theta = rr.theta;
   const Vec3 taup = (kappa * tr) + (2.0 * mu * theta) * d.array();
   const Mat3& Q = eig.Q;
   out.tau = Q * taup.asDiagonal() * Q.transpose();
@@ -141,16 +169,12 @@ bool henckyJ2(const Mat3& F, const double* st, double kappa, double mu, const Pl
   const Mat3 G = Finv.transpose();
   out.P = out.tau * G;
   out.J = J;
-  if (r.active) {
+  Mat3 cnew = c;
+  if (rr.r.active) {
     const Vec3 lnew = eig.l.array() * (-2.0 * (1.0 - theta) * d.array()).exp();
-    const Mat3 cnew = Finv * (Q * lnew.asDiagonal() * Q.transpose()) * Finv.transpose();
-    symTo6(cnew, out.state);
-    out.state[6] = alpha + r.x;
-    out.state[7] = 1.0;
-  } else {
-    for (int k = 0; k < 7; ++k) out.state[k] = st[k];
-    out.state[7] = 0.0;
+    cnew = Finv * (Q * lnew.asDiagonal() * Q.transpose()) * Finv.transpose();
   }
+  writeState(rr, st, cnew, out.state);
   if (A) {
     // dF = e_c e_d^T: dbe~ = q_c f_d^T + f_d q_c^T (q_c = row c of Q, f_d = column d of Q^T F c),
     // deps~ = 1/2 g o dbe~, tr(deps) = d ln J = G(c, d); dP = dtau G - (tau G e_d)(e_c^T G).
@@ -159,7 +183,7 @@ bool henckyJ2(const Mat3& F, const double* st, double kappa, double mu, const Pl
       g(a, a) = 0.5 / eig.l(a);
       for (int b = a + 1; b < 3; ++b) g(a, b) = g(b, a) = 0.5 * detail::logDividedDifference(eig.l(a), eig.l(b));
     }
-    const Vec3 n = r.active ? Vec3(d / nd) : Vec3::Zero();
+    const Vec3 n = rr.r.active ? Vec3(d / nd) : Vec3::Zero();
     const Mat3 QtFc = Q.transpose() * Fc;
     const Mat3 tauG = out.tau * G;
     const double twoMuTheta = 2.0 * mu * theta;
@@ -171,7 +195,7 @@ bool henckyJ2(const Mat3& F, const double* st, double kappa, double mu, const Pl
         const double trd = G(cc, dd);
         Mat3 dt = twoMuTheta * de;
         dt.diagonal().array() += (kappa - twoMuTheta / 3.0) * trd;
-        if (r.active) dt.diagonal() += (cN * n.dot(de.diagonal())) * n;
+        if (rr.r.active) dt.diagonal() += (rr.cN * n.dot(de.diagonal())) * n;
         const Mat3 dP = Q * dt * Q.transpose() * G - tauG.col(dd) * G.row(cc);
         for (int a = 0; a < 3; ++a)
           for (int b = 0; b < 3; ++b) (*A)(a * 3 + b, cc * 3 + dd) = dP(a, b);
@@ -191,37 +215,23 @@ bool smallJ2(const Mat3& F, const double* st, double kappa, double mu, const Pla
   const double tr = ee.trace();
   const Mat3 dev = ee - (tr / 3.0) * Mat3::Identity();
   const double nd = dev.norm();
-  const double q = std::sqrt(6.0) * mu * nd;
-  ScalarReturn r;
-  if (!scalarReturn(p, q, alpha, 3.0 * mu, r)) return false;
-  const double theta = r.active ? 1.0 - 3.0 * mu * r.x / q : 1.0;
-  const double cN = r.active ? 6.0 * mu * mu * (r.x / q - 1.0 / (3.0 * mu + r.slope)) : 0.0;
+  Radial rr;
+  if (!radialReturn(p, std::sqrt(6.0) * mu * nd, alpha, mu, rr)) return false;
+  const double theta = rr.theta;
   out.tau = (2.0 * mu * theta) * dev;
   out.tau.diagonal().array() += kappa * tr;
   out.P = out.tau;
   out.J = 1.0;
-  if (r.active) {
-    symTo6(symFrom6(st) + (1.0 - theta) * dev, out.state);
-    out.state[6] = alpha + r.x;
-    out.state[7] = 1.0;
-  } else {
-    for (int k = 0; k < 7; ++k) out.state[k] = st[k];
-    out.state[7] = 0.0;
-  }
+  writeState(rr, st, symFrom6(st) + (1.0 - theta) * dev, out.state);
   if (A) {
-    const Mat3 N = r.active ? Mat3(dev / nd) : Mat3::Zero();
-    const double twoMuTheta = 2.0 * mu * theta;
-    A->setZero();
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        (*A)(a * 3 + b, a * 3 + b) += 0.5 * twoMuTheta;
-        (*A)(a * 3 + b, b * 3 + a) += 0.5 * twoMuTheta;
-        if (a == b)
-          for (int c = 0; c < 3; ++c) (*A)(a * 3 + a, c * 3 + c) += kappa - twoMuTheta / 3.0;
-        if (r.active)
-          for (int c = 0; c < 3; ++c)
-            for (int d = 0; d < 3; ++d) (*A)(a * 3 + b, c * 3 + d) += cN * N(a, b) * N(c, d);
-      }
+    // The isotropic law with the scaled shear modulus mu theta (bulk modulus kappa kept), plus
+    // cN N (x) N, N = dev / |dev|.
+    detail::smallStrainTangent<3>(kappa - 2.0 * mu * theta / 3.0, mu * theta, *A);
+    if (rr.r.active) {
+      const Mat3 N = dev / nd;
+      const Eigen::Map<const Eigen::Matrix<double, 9, 1>> n(N.data());  // N is symmetric: either order
+      *A += rr.cN * n * n.transpose();
+    }
   }
   return true;
 }
@@ -231,6 +241,7 @@ bool smallJ2(const Mat3& F, const double* st, double kappa, double mu, const Pla
 template <int D>
 bool Material::plasticEval(const MatD<D>& F, const double* committed, MatD<D>& P, TangentD<D>* A,
                            double* trial, Eigen::Matrix3d* sigma) const {
+  if (D != spec_.dim) detail::throwDimMismatch(D, spec_.dim);
   const PlasticitySpec& p = spec_.plastic;
   const bool finite = spec_.kind == MaterialKind::Hencky;
   double st[8];

@@ -88,17 +88,18 @@ inline std::vector<FCase<3>> deformationCases<3>() {
   };
 }
 
-/// Central differences of stress(): column c*D+d = (P(F + h e_c e_d^T) - P(F - h ...)) / 2h.
+/// Central differences of stress(): column c*D+d = (P(F + h e_c e_d^T) - P(F - h ...)) / 2h,
+/// from the committed state `committed` of a material with history (nullptr: the virgin state).
 template <int D>
-TangentD<D> fdTangent(const Material& m, const MatD<D>& F, double h) {
+TangentD<D> fdTangent(const Material& m, const MatD<D>& F, double h, const double* committed = nullptr) {
   TangentD<D> A;
   for (int c = 0; c < D; ++c)
     for (int d = 0; d < D; ++d) {
       MatD<D> Fp = F, Fm = F, Pp, Pm;
       Fp(c, d) += h;
       Fm(c, d) -= h;
-      EXPECT_TRUE(m.stress<D>(Fp, Pp));
-      EXPECT_TRUE(m.stress<D>(Fm, Pm));
+      EXPECT_TRUE(m.stress<D>(Fp, committed, Pp, nullptr));
+      EXPECT_TRUE(m.stress<D>(Fm, committed, Pm, nullptr));
       for (int a = 0; a < D; ++a)
         for (int b = 0; b < D; ++b) A(a * D + b, c * D + d) = (Pp(a, b) - Pm(a, b)) / (2 * h);
     }

@@ -173,8 +173,7 @@ void StressPointEffect<D>::addDirectional(BondWork<D>& w) const {
     const Mat Kinv = K.inverse();
     Mat P;
     TangentD<D> A;
-    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.state ? w.state + p * w.stateStride : nullptr,
-             nullptr, sc, true, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.pointState(p), nullptr, sc, true, w.i, P, A);
     const Mat dP = contract<D>(A, kinematics::deformationGradient(dFK, Kinv));
     for (int l = 0; l < w.m; ++l) {
       if (grp[l] != p) continue;
@@ -289,8 +288,7 @@ void StressPointEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
       }
     Mat P;
     TangentD<D> A;
-    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.state ? w.state + p * w.stateStride : nullptr,
-             w.trial ? w.trial + p * w.stateStride : nullptr, sc, tangent, w.i, P, A);
+    piola<D>(material(w.i), kinematics::deformationGradient(FK, Kinv), w.pointState(p), w.pointTrial(p), sc, tangent, w.i, P, A);
     addPiolaForceStates<D>(w, P, tangent ? &A : nullptr, h, gsum, in);
   }
 }

@@ -659,7 +659,7 @@ struct ImplD final : Model::Impl {
           }
           const Mat Fp = kinematics::deformationGradient<Mat>(FK, K.inverse());
           Eigen::Matrix3d sp3;
-          const double* st = w.state ? w.state + g * w.stateStride : nullptr;
+          const double* st = w.pointState(g);
           const bool ok = model.material(i).template cauchy<D>(Fp, st, sp3);
           valid = valid && ok;
           Fsum += v * Fp;
@@ -817,11 +817,16 @@ long long Model::breakBonds(const std::vector<double>& u, const std::vector<doub
   if (eqps.size() != static_cast<std::size_t>(particles_.size()))
     throw std::invalid_argument("Model::breakBonds: " + std::to_string(eqps.size()) + " plastic strains for " +
                                 std::to_string(particles_.size()) + " local particles");
+  return breakBondsWhere(u, &eqps);
+}
+
+long long Model::breakBondsWhere(const std::vector<double>& u, const std::vector<double>* eqps) {
   long long broken = 0;
   removeBondsIf([&](int i, int j) {
     const DamageSpec& d = bondDamage(i, j);
     const bool brk = (d.stretchCriterion && bondStretch(u, i, j) >= d.sCr) ||
-                     (d.criticalPlasticStrain > 0 && 0.5 * (eqps[i] + eqps[j]) >= d.criticalPlasticStrain);
+                     (eqps && d.criticalPlasticStrain > 0 && 0.5 * ((*eqps)[i] + (*eqps)[j]) >= d.criticalPlasticStrain);
+    // Count each bond once over all ranks: at the end with the lower global id.
     broken += brk && particles_.globalId[i] < particles_.globalId[j];
     return !brk;
   });
@@ -851,14 +856,7 @@ std::vector<double> Model::trialPlasticStrain(const std::vector<double>& u) cons
 long long Model::breakBonds(const std::vector<double>& u) {
   if (!damage_) return 0;
   if ((damageLaws_.empty() || particles_.material.empty()) && damage_->stretchCriterion) return breakBondsAbove(u, damage_->sCr);
-  long long broken = 0;
-  removeBondsIf([&](int i, int j) {
-    const DamageSpec& d = bondDamage(i, j);
-    const bool brk = d.stretchCriterion && bondStretch(u, i, j) >= d.sCr;
-    broken += brk && particles_.globalId[i] < particles_.globalId[j];
-    return !brk;
-  });
-  return broken;
+  return breakBondsWhere(u, nullptr);
 }
 
 double Model::bondStretch(const std::vector<double>& u, int i, int j) const {

@@ -51,12 +51,12 @@ void LoadFactorModel::setLoadFactor(double lambda) {
   if (listener_) listener_(loadAt(lambda));
 }
 
-double loadOnPath(const std::vector<double>& path_, double s) {
-  if (path_.empty()) return s;
-  const int n = static_cast<int>(path_.size());
+double loadOnPath(const std::vector<double>& knots, double s) {
+  if (knots.empty()) return s;
+  const int n = static_cast<int>(knots.size());
   const double t = s * n;
   const double r = std::round(t);
-  auto knot = [&](int k) { return k <= 0 ? 0.0 : path_[std::min(k, n) - 1]; };
+  auto knot = [&](int k) { return k <= 0 ? 0.0 : knots[std::min(k, n) - 1]; };
   if (std::abs(t - r) <= 1e-9) return knot(static_cast<int>(r));  // a corner: exactly its value
   const int k = std::clamp(static_cast<int>(std::floor(t)), 0, n - 1);
   return knot(k) + (t - k) * (knot(k + 1) - knot(k));
@@ -541,10 +541,10 @@ bool LoadStepper::breakAfterConvergence(Thyra::VectorBase<double>& x, StepRecord
 
 // The observers' veto (a stability check): the run stops at the previous step's state.
 bool LoadStepper::vetted(const StepRecord& rec, const NewtonResult& nr, const Thyra::VectorBase<double>& x, double previous) {
-  const StepInfo info{rec, nr, x, state_.loadFactor};
+  const StepInfo info{rec, nr, x, model_->loadAt(state_.loadFactor)};
   std::string vetoed;
   for (auto* o : observers_)
-    if (vetoed.empty()) vetoed = o->vet(info, previous);
+    if (vetoed.empty()) vetoed = o->vet(info, model_->loadAt(previous));
   if (vetoed.empty()) return true;
   failure_ = vetoed;
   state_.loadFactor = previous;
@@ -566,7 +566,7 @@ void LoadStepper::accept(const Thyra::VectorBase<double>& x, const StepRecord& r
     increment = std::min(nominal, 2 * increment);
   }
   if (commit_) commit_(*xConverged_);  // the history of the accepted step, before anyone sees it
-  const StepInfo info{rec, nr, *xConverged_, state_.loadFactor};
+  const StepInfo info{rec, nr, *xConverged_, model_->loadAt(state_.loadFactor)};
   for (auto* o : observers_) o->accepted(info);
 }
 

@@ -95,6 +95,9 @@ struct BondWork {
   const double* state = nullptr;
   double* trial = nullptr;
   int stateStride = 0;
+  /// Point p's committed state and where its trial state goes (nullptr when there is none).
+  const double* pointState(int p) const { return state ? state + p * stateStride : nullptr; }
+  double* pointTrial(int p) const { return trial ? trial + p * stateStride : nullptr; }
   // Sums over the family a repeated product's affine form may use (filled only for it):
   double Vsum = 0;             // sum_l V_l
   Vec VdYsum;                  // sum_l V_l dY_l
@@ -349,6 +352,9 @@ class Model {
  private:
   /// Stretch (|Y| - |xi|) / |xi| of the bond from local particle i to local particle j at u.
   double bondStretch(const std::vector<double>& u, int i, int j) const;
+  /// Breaks every bond that its damage law's stretch criterion, or (with eqps, the local
+  /// particles' plastic strains) its ductile criterion, breaks; returns them counted once.
+  long long breakBondsWhere(const std::vector<double>& u, const std::vector<double>* eqps);
   void checkShapeTensors() const;
   bool shapeTensorInvertible(int ownedLocal) const;
   std::optional<DamageSpec> damage_;

@@ -155,7 +155,8 @@ struct StepInfo {
   const StepRecord& record;
   const NewtonResult& result;     // the solve that converged it
   const Thyra::VectorBase<double>& x;
-  double loadFactor;
+  double loadFactor;              // the model's load factor: with a load path (LoadFactorModel::setLoadPath)
+                                  // the path's value at the record's pseudo-time record.loadFactor
 };
 
 class StepObserver {

@@ -1,10 +1,12 @@
 #pragma once
-// Spectral helpers shared by the elastic and the elastic-plastic laws (internal to the material
-// package): the divided difference of ln, and the eigen decomposition of a symmetric positive
-// definite 2x2 or 3x3 matrix.
+// Kernels shared by the elastic and the elastic-plastic laws (internal to the material package):
+// the divided difference of ln, the eigen decomposition of a symmetric positive definite 2x2 or
+// 3x3 matrix, the isotropic small-strain tangent, and the dimension check.
 #include "perinox/material/Material.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace perinox::detail {
@@ -63,6 +65,25 @@ inline bool symEig(const MatD<3>& b, double /*detb*/, SymEig<3>& e) {
   // Extreme stretch (condition number of F beyond ~1e8) can round the smallest eigenvalue of b
   // to <= 0; report failure instead of taking the log of it.
   return e.l.minCoeff() > 0.0 && e.l.allFinite();
+}
+
+/// A(ab,cd) = lambda d_ab d_cd + mu (d_ac d_bd + d_ad d_bc).
+template <int N>
+inline void smallStrainTangent(double lambda, double mu, TangentD<N>& A) {
+  A.setZero();
+  for (int a = 0; a < N; ++a) {
+    for (int b = 0; b < N; ++b) {
+      A(a * N + b, b * N + a) += mu;
+      A(a * N + b, a * N + b) += mu;
+    }
+    for (int c = 0; c < N; ++c) A(a * N + a, c * N + c) += lambda;
+  }
+}
+
+[[noreturn]] inline void throwDimMismatch(int D, int dim) {
+  throw std::logic_error("perinox::Material: called with a " + std::to_string(D) +
+                         "D deformation gradient but the material was built for dim = " +
+                         std::to_string(dim) + ".");
 }
 
 }  // namespace perinox::detail
