@@ -25,17 +25,19 @@ std::vector<std::string> probeComponents(const ProbeDef& probe, int dim) {
 }
 
 std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe,
-                               const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned) {
+                               const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned,
+                               const std::vector<ParticleOutput>* outs) {
   const int D = ev.problem().dim();
   if (probe.quantity == "Reaction") return ev.reactionOn(x, probe.particles);
   if (probe.quantity == "Plastic Strain") {
     // The committed equivalent plastic strain: its largest value and its mean over the region.
-    const auto outs = ev.ownedOutputs(x);
+    std::vector<ParticleOutput> computed;
+    if (!outs) outs = &(computed = ev.ownedOutputs(x));
     double mx = 0.0, sum[2] = {0.0, 0.0}, all[2] = {0.0, 0.0};
     for (int p : probe.particles)
       if (const int l = ev.ownedIndex(p); l >= 0) {
-        mx = std::max(mx, outs[l].eqps);
-        sum[0] += outs[l].eqps;
+        mx = std::max(mx, (*outs)[l].eqps);
+        sum[0] += (*outs)[l].eqps;
         sum[1] += 1;
       }
     double gmax = 0.0;

@@ -3,6 +3,7 @@
 // stepping and of arc-length continuation, and the stability check; the probe values and the
 // error against a scene's reference they and the summary use.
 #include <Thyra_VectorBase.hpp>
+#include <algorithm>
 #include <ios>
 #include <iostream>
 #include <string>
@@ -36,27 +37,33 @@ class CoutFormat {
   std::streamsize precision_;
 };
 
-/// Mean displacement of a probe's particles, or the summed reaction, at state x (collective).
+/// Mean displacement of a probe's particles, the summed reaction, or the largest and the mean
+/// plastic strain, at state x (collective). outs: the owned outputs at x, if already computed.
 std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe,
-                               const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned);
+                               const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned,
+                               const std::vector<ParticleOutput>* outs = nullptr);
 
 /// e_u = sum_i |u_i - u_ref,i| / |u_ref,i| V_i / sum_i V_i over real particles with u_ref != 0 (collective).
 double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref, const std::vector<double>& uOwned);
 
-/// The scene's probes, recorded at every accepted step (collective: every rank).
 /// A probe's value's key in summary.json ("displacement", "reaction", "plastic_strain") and the
 /// names of its components (x, y, z; max, mean for the plastic strain).
 std::string probeKey(const ProbeDef& probe);
 std::vector<std::string> probeComponents(const ProbeDef& probe, int dim);
 
+/// The scene's probes, recorded at every accepted step (collective: every rank).
 class ProbeRecorder final : public StepObserver {
  public:
   ProbeRecorder(const PeridynamicEvaluator& ev, const Scene& scene, RunResult& res) : ev_(ev), scene_(scene), res_(res) {}
   void accepted(const StepInfo& s) override {
     const auto u = ev_.ownedDisplacements(s.x);
+    // The outputs once a step, for all the plastic-strain probes (every rank takes the same branch).
+    std::vector<ParticleOutput> outs;
+    if (std::any_of(scene_.probes.begin(), scene_.probes.end(), [](const ProbeDef& p) { return p.quantity == "Plastic Strain"; }))
+      outs = ev_.ownedOutputs(s.x);
     for (std::size_t k = 0; k < scene_.probes.size(); ++k)
       if (scene_.probes[k].quantity != "Profile")
-        res_.probes[k].second.push_back({s.loadFactor, probeValue(ev_, scene_.probes[k], s.x, u)});
+        res_.probes[k].second.push_back({s.loadFactor, probeValue(ev_, scene_.probes[k], s.x, u, &outs)});
   }
 
  private:

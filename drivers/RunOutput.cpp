@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "Observers.hpp"
+#include "perinox/io/HostOutput.hpp"  // historyFields
 #include "perinox/io/Output.hpp"
 #include "perinox/io/OutputFolder.hpp"
 
@@ -208,8 +209,6 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   const bool damage = ev.problem().damage;
   PointField dmg{"damage", 1, damage ? ev.ownedDamage() : std::vector<double>(n, 0.0)};
   const bool plastic = ev.problem().plastic();
-  PointField eqps{"equivalent_plastic_strain", 1, std::vector<double>(n, 0.0)};
-  PointField yielded{"yielded", 1, std::vector<double>(n, 0.0)};
   std::vector<std::string> rows(n);  // this rank's fields.csv rows
   for (std::size_t i = 0; i < n; ++i) {
     const long long p = ev.ownedParticles()[i];
@@ -219,8 +218,6 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values[9 * i + 3 * r + c] = outs[i].cauchy(r, c);
     fict.values[i] = d.fictitious[k];
-    eqps.values[i] = outs[i].eqps;
-    yielded.values[i] = outs[i].yielded ? 1.0 : 0.0;
     std::ostringstream csv;
     csv << std::setprecision(12);
     csv << p << ',' << d.X[k][0] << ',' << d.X[k][1] << ',' << d.X[k][2] << ',' << disp.values[3 * i] << ','
@@ -233,10 +230,7 @@ void writeFields(const PeridynamicEvaluator& ev, const Thyra::VectorBase<double>
   }
   std::vector<PointField> fields{disp, stress, fict, rk};
   if (damage) fields.push_back(dmg);  // only where the effect is on
-  if (plastic) {
-    fields.push_back(eqps);
-    fields.push_back(yielded);
-  }
+  for (auto& f : historyFields(ev.problem(), outs)) fields.push_back(std::move(f));
   injectedWriteFault(rank, dir + "/fields_" + std::to_string(rank) + ".vtu");
   if (vtk) {
     const std::string piece = "fields_" + std::to_string(rank) + ".vtu";

@@ -24,21 +24,9 @@ BreakReport DamageBookkeeping::breakBonds(const std::vector<double>& u, const do
   BreakReport rep;
   long long local = 0;
   if (model_.ductileCriterion()) {
-    // The ends' plastic strains, owned ones from the trial state at u, ghosts' by an Import
-    // (component 0 of the DOF vectors), so both ranks of a bond decide alike.
-    const int D = problem_.dim();
-    const LocalParticles& lp = model_.particles();
-    const std::vector<double> mine = model_.trialPlasticStrain(u);
-    TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
-    {
-      auto od = owned.getDataNonConst();
-      for (int i = 0; i < lp.numOwned; ++i) od[i * D] = mine[i];
-    }
-    ghosted.doImport(owned, *dofs_.allImport, Tpetra::INSERT);
-    std::vector<double> eqps(lp.size(), 0.0);
-    auto gd = ghosted.getData();
-    for (int l = 0; l < lp.size(); ++l) eqps[l] = l < lp.numOwned ? mine[l] : gd[l * D];
-    local = model_.breakBonds(u, eqps);
+    // The ends' plastic strains, owned ones from the trial state at u, the ghosts' from their
+    // owners, so both ranks of a bond decide alike.
+    local = model_.breakBonds(u, onLocalParticles(model_.trialPlasticStrain(u)));
   } else {
     local = model_.breakBonds(u);
   }
@@ -153,14 +141,12 @@ void DamageBookkeeping::detachSingular(const double* xd, BreakReport& rep) {
 }
 
 std::vector<long long> DamageBookkeeping::unanchoredParticles() const {
-  const int D = problem_.dim();
   const LocalParticles& lp = model_.particles();
   // anchored[l]: particle l (owned or ghost) reaches a prescribed DOF through intact bonds. Spread
   // over the owned families to a fixed point on each rank, then to the ghosts by an Import, until
   // no rank anchors another particle.
   std::vector<char> anchored(lp.size(), 0);
   for (int l = 0; l < lp.numOwned; ++l) anchored[l] = problem_.fixedMask[problem_.index(lp.globalId[l])] != 0;
-  TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
   long long before = -1;
   for (;;) {
     for (bool changed = true; changed;) {
@@ -180,19 +166,30 @@ std::vector<long long> DamageBookkeeping::unanchoredParticles() const {
     Teuchos::reduceAll(*comm_, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(total));
     if (total == before) break;
     before = total;
-    {
-      auto od = owned.getDataNonConst();
-      for (int i = 0; i < lp.numOwned; ++i)
-        for (int c = 0; c < D; ++c) od[i * D + c] = anchored[i];
-    }
-    ghosted.doImport(owned, *dofs_.allImport, Tpetra::INSERT);
-    auto gd = ghosted.getData();
-    for (int l = lp.numOwned; l < lp.size(); ++l) anchored[l] = anchored[l] || gd[l * D] > 0.5;
+    const std::vector<double> all = onLocalParticles(std::vector<double>(anchored.begin(), anchored.begin() + lp.numOwned));
+    for (int l = lp.numOwned; l < lp.size(); ++l) anchored[l] = anchored[l] || all[l] > 0.5;
   }
   std::vector<long long> loose;
   for (int i = 0; i < lp.numOwned; ++i)
     if (!anchored[i] && !model_.detached(i)) loose.push_back(lp.globalId[i]);
   return onAnyRank(loose);
+}
+
+std::vector<double> DamageBookkeeping::onLocalParticles(const std::vector<double>& mine) const {
+  // Component 0 of the all-DOF vectors carries the value; allImport takes it to the ghosts.
+  const int D = problem_.dim();
+  const LocalParticles& lp = model_.particles();
+  TVector owned(dofs_.ownedAll), ghosted(dofs_.overlapAll);
+  {
+    auto od = owned.getDataNonConst();
+    for (int i = 0; i < lp.numOwned; ++i) od[i * D] = mine[i];
+  }
+  ghosted.doImport(owned, *dofs_.allImport, Tpetra::INSERT);
+  std::vector<double> all(mine.begin(), mine.end());
+  all.resize(lp.size());
+  auto gd = ghosted.getData();
+  for (int l = lp.numOwned; l < lp.size(); ++l) all[l] = gd[l * D];
+  return all;
 }
 
 std::vector<long long> DamageBookkeeping::onAnyRank(const std::vector<long long>& mine) const {

@@ -45,22 +45,16 @@ void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev,
   const auto outs = ev.ownedOutputs(x);
   std::vector<Eigen::Vector3d> points;
   PointField displacement{"displacement", 3, {}}, stress{"cauchy_stress", 9, {}};
-  PointField eqps{"equivalent_plastic_strain", 1, {}}, yielded{"yielded", 1, {}};
   for (std::size_t l = 0; l < ev.ownedParticles().size(); ++l) {
     const long long p = ev.ownedParticles()[l];
     points.push_back(d.X[ev.problem().index(p)]);
     for (int c = 0; c < 3; ++c) displacement.values.push_back(c < D ? u[l * D + c] : 0.0);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) stress.values.push_back(outs[l].cauchy(r, c));
-    eqps.values.push_back(outs[l].eqps);
-    yielded.values.push_back(outs[l].yielded ? 1.0 : 0.0);
   }
   std::vector<PointField> fields{displacement, stress};
   if (ev.problem().damage) fields.push_back({"damage", 1, ev.ownedDamage()});
-  if (ev.problem().plastic()) {
-    fields.push_back(eqps);
-    fields.push_back(yielded);
-  }
+  for (auto& f : historyFields(ev.problem(), outs)) fields.push_back(std::move(f));
   if (rank == 0) std::filesystem::create_directories(dir);
   ev.comm()->barrier();  // the folder exists before any rank writes into it
   writeVtu(dir + "/fields_" + std::to_string(rank) + ".vtu", points, fields);
@@ -69,6 +63,16 @@ void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& ev,
     for (int r = 0; r < ranks; ++r) pieces.push_back("fields_" + std::to_string(r) + ".vtu");
     writePvtu(dir + "/fields.pvtu", pieces, fields);
   }
+}
+
+std::vector<PointField> historyFields(const ProblemSpec& problem, const std::vector<ParticleOutput>& outputs) {
+  if (!problem.plastic()) return {};
+  PointField eqps{"equivalent_plastic_strain", 1, {}}, yielded{"yielded", 1, {}};
+  for (const ParticleOutput& o : outputs) {
+    eqps.values.push_back(o.eqps);
+    yielded.values.push_back(o.yielded ? 1.0 : 0.0);
+  }
+  return {eqps, yielded};
 }
 
 void writeProbeSummary(const std::string& file, const Teuchos::Comm<int>& comm, const std::vector<ProbeHistory>& probes,

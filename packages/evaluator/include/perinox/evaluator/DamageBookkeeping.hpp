@@ -47,6 +47,9 @@ class DamageBookkeeping {
   std::vector<long long> unanchoredParticles() const;
   /// The union over all ranks of particle global ids, sorted (every rank gets the same list).
   std::vector<long long> onAnyRank(const std::vector<long long>& mine) const;
+  /// A value per local particle (owned, then ghosts): `mine` for the owned ones, each ghost's
+  /// from its owner (collective).
+  std::vector<double> onLocalParticles(const std::vector<double>& mine) const;
 
   Teuchos::RCP<const Teuchos::Comm<int>> comm_;
   const ProblemSpec& problem_;

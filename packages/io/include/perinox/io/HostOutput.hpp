@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "perinox/evaluator/PeridynamicEvaluator.hpp"
+#include "perinox/io/Output.hpp"
 
 namespace perinox {
 
@@ -38,6 +39,11 @@ struct ProbeHistory {
 /// displacement, the Cauchy stress and, with damage, the damage index) and, on rank 0,
 /// dir/fields.pvtu; makes dir. Collective.
 void writeParticleFields(const std::string& dir, const PeridynamicEvaluator& evaluator, const Thyra::VectorBase<double>& x);
+
+/// The fields of the materials' history for a problem with a plastic material (none otherwise):
+/// equivalent_plastic_strain and yielded (1 where the last committed step flowed), one value per
+/// output. Both field writers (this one and the driver's) add them.
+std::vector<PointField> historyFields(const ProblemSpec& problem, const std::vector<ParticleOutput>& outputs);
 
 /// Rank 0 writes file (its folder made) as {"ranks": N, <extra>, "probes": {name: [{"load_factor": l,
 /// quantity: [...]}, ...]}} with 17 digits; extra is a JSON fragment such as "\"newton_iterations\": 4"
