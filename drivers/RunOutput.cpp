@@ -339,6 +339,7 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   j["dofs"] = res.dofs;
   j["converged"] = res.converged;
   if (!res.converged) j["failure"] = res.failure;
+  if (std::isfinite(res.limitLoad)) j["limit_load_factor"] = res.limitLoad;
   j["wall_time_s"] = res.wallTime;
   j["run_segments"] = facts.segment;
   if (!facts.resumedFrom.is_null()) j["resumed_from"] = facts.resumedFrom;

@@ -170,6 +170,7 @@ LoadStepperOptions loadSteppingOptions(const Scene& scene, const PeridynamicEval
   const int segments = std::max<int>(1, static_cast<int>(s.loadPath.size()));
   l.set("Load Steps", s.loadSteps * segments);  // the stepper's steps span the whole path
   l.set("Max Cutbacks", s.maxCutbacks);
+  l.set("Limit Load Ratio", s.limitLoadRatio);
   l.set("Min Increment", s.minIncrement);
   l.set("Max Total Steps", s.maxTotalSteps);
   l.set("Adaptive Steps", s.adaptive);
@@ -237,6 +238,7 @@ std::pair<double, int> resumeFrom(const Checkpoint& resume, PeridynamicEvaluator
   ss.lastIncrement = st.at("last_increment");
   ss.stallBreaks = st.at("stall_breaks");
   ss.atLimit = st.value("at_limit", false);
+  ss.initialCompliance = st.value("initial_compliance", 0.0);
   std::vector<StepRecord> records;
   for (const auto& sj : st.at("steps")) records.push_back(stepFromJson(sj));
   for (std::size_t k = 0; k < res.probes.size(); ++k)
@@ -317,6 +319,7 @@ Solved loadStepping(const SolveContext& c, const std::optional<Checkpoint>& resu
   res.steps = stepper.records();
   res.pathLoadFactors = stepper.path();
   res.failure = stepper.failure();
+  res.limitLoad = stepper.limitLoad();
   out.loadFactor = stepper.state().loadFactor;
   out.x = Thyra::createMember(c.evaluator->get_x_space());
   Thyra::copy(stepper.converged(), out.x.ptr());
@@ -459,7 +462,8 @@ void commitResults(const Scene& scene, const RunResult& res, const RunFacts& fac
     const std::string inexact = inexactSolvesWarning(res.steps);
     if (res.hasError) std::cout << "displacement error e_u = " << res.errorU << " against " << scene.reference.type << "\n";
     if (!inexact.empty()) std::cout << "note: " << inexact << "\n";
-    std::cout << (res.converged ? "converged" : "FAILED: " + res.failure) << "; results in " << options.outputDir << " ("
+    const std::string end = res.converged ? "converged" : std::isfinite(res.limitLoad) ? "STOPPED: " + res.failure : "FAILED: " + res.failure;
+    std::cout << end << "; results in " << options.outputDir << " ("
               << std::fixed << std::setprecision(2) << res.wallTime << " s)\n";
   });
 }

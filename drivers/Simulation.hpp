@@ -4,6 +4,7 @@
 // into place at the end, so a run never leaves a half-written result.
 #include <Teuchos_Comm.hpp>
 #include <Teuchos_RCP.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,8 @@ struct RunResult {
   std::vector<std::pair<std::string, std::vector<std::pair<double, std::vector<double>>>>> probes;
   std::vector<double> pathLoadFactors;  // load factor of every converged step (path.csv)
   std::vector<LimitPoint> limitPoints;  // arc-length continuation: local maxima of the load factor
+  // Load stepping stopped at a limit load (LoadStepper::limitLoad): its load factor; NaN otherwise.
+  double limitLoad = std::numeric_limits<double>::quiet_NaN();
   bool hasError = false;
   double errorU = 0;   // e_u of seed 000 eq. 56 at the final state
   double wallTime = 0;

@@ -175,3 +175,41 @@ add_test(NAME plots_drawn_plastic COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK}
   --converged --png deformed.png probes.png -- ${mpi_plots_plastic} $<TARGET_FILE:perinox> run
   ${PROJECT_SOURCE_DIR}/xml/plastic_uniaxial_strain.xml --output ${PERINOX_TEST_OUT}/plots_drawn_plastic --quiet)
 set_tests_properties(plots_drawn_plastic PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS verification)
+
+# A thick-walled cylinder under internal pressure (plane strain, perfect plasticity) to its limit
+# load and past it: the load stepper converges up to the limit and stops there, naming it
+# (Solver/Limit Load Ratio), and Newton stays quadratic. Against the closed forms
+# (tests/check_plastic_vessel.py): first yield at the bore (0.4323 sigma_y; the run brackets it
+# in [0.425, 0.430] sigma_y), the limit pressure (2/sqrt 3) sigma_y ln 2 = 0.8004 sigma_y
+# (measured +6.6 %, +2.0 %, +0.9 % at 10, 20, 40 shells) within 3 % at the scene's 20 shells,
+# and the elastic bore displacement (measured +9.8 %, +3.6 %, +1.9 %) within 5 %.
+perinox_run_test(NAME verify_plastic_cylinder SCENE plastic_cylinder.xml
+  CHECK --expect-from-scene ${XML}/plastic_cylinder.xml --quadratic LABELS verification FIXTURE_SETUP plastic_cylinder)
+add_test(NAME verify_plastic_cylinder_closed_form COMMAND ${Python3_EXECUTABLE}
+  ${CMAKE_CURRENT_SOURCE_DIR}/check_plastic_vessel.py ${PERINOX_TEST_OUT}/verify_plastic_cylinder --shape cylinder
+  --E 200e9 --nu 0.3 --yield 250e6 --p-ref 250e6 --inner 1 --outer 2 --probe-radius 1.025
+  --yield-tol 0.03 --limit-tol 0.03 --stiffness-tol 0.05)
+set_tests_properties(verify_plastic_cylinder_closed_form PROPERTIES LABELS verification FIXTURES_REQUIRED plastic_cylinder)
+# Two ranks stop at the same limit load with the same steps.
+perinox_run_test(NAME plastic_cylinder_np2 SCENE plastic_cylinder.xml NP 2
+  CHECK --expect-from-scene ${XML}/plastic_cylinder.xml LABELS verification FIXTURE_SETUP plastic_cylinder_np2)
+add_test(NAME plastic_cylinder_np2_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+  --rtol 1e-8 ${PERINOX_TEST_OUT}/verify_plastic_cylinder ${PERINOX_TEST_OUT}/plastic_cylinder_np2)
+set_tests_properties(plastic_cylinder_np2_compare PROPERTIES LABELS "verification;mpi"
+  FIXTURES_REQUIRED "plastic_cylinder;plastic_cylinder_np2")
+
+# Radial Force and Limit Load Ratio refuse what they cannot mean, in one sentence.
+perinox_bad_input(radial_force_with_value ${XML}/plastic_cylinder.xml "'Loads/pressure/Value' is not used by a Radial Force"
+  --set "Loads/pressure/Value={1.0, 0.0}")
+perinox_bad_input(radial_force_without_center ${XML}/plastic_cylinder.xml "'Loads/pressure/Center' is needed by a Radial Force"
+  --set "Loads/pressure/Center={}")
+perinox_bad_input(radial_force_zero ${XML}/plastic_cylinder.xml "'Loads/pressure/Magnitude' must be finite and non-zero"
+  --set "Loads/pressure/Magnitude=0.0")
+perinox_bad_input(radial_force_axis_in_2d ${XML}/plastic_cylinder.xml "'Loads/pressure/Axis' is for 3D scenes"
+  --set "Loads/pressure/Axis={0.0, 1.0}")
+perinox_bad_input(radial_force_keys_on_total_force ${XML}/plastic_cylinder.xml "belong to a Radial Force, not a Total Force"
+  --set "Loads/pressure/Type=Total Force")
+perinox_bad_input(radial_force_at_centre ${XML}/plastic_cylinder.xml "lies on its centre (or axis): it has no direction"
+  --set "Loads/pressure/Center={1.025, 0.0}")
+perinox_bad_input(limit_load_ratio_below_one ${XML}/plastic_cylinder.xml "'Solver/Limit Load Ratio' must be 0 (no check) or more than 1"
+  --set "Solver/Limit Load Ratio=0.5")

@@ -297,8 +297,13 @@ ParameterList loadTemplate() {
   ParameterList l = onRegion("load", "name of the region carrying the load");
   setChoice(l, "Type", "Total Force",
             {{"Total Force", "spread over the region by volume"}, {"Traction", "force per area on a Side Layer"},
-             {"Body Force", "force per volume"}});
-  setVector(l, p, "Value", arr<double>({0, 0, 0}), "the load vector at load factor 1", Length::Dim);
+             {"Body Force", "force per volume"},
+             {"Radial Force", "a total force of Magnitude spread over the region by volume, each particle's share pointing away from Center "
+                              "(3D with Axis: away from the axis through Center); a pressure p on a bore of area A is Magnitude = p A"}});
+  setVector(l, p, "Value", arr<double>({0, 0, 0}), "the load vector at load factor 1 (not with Radial Force)", Length::Dim);
+  l.set("Magnitude", 0.0, "Radial Force: the total force at load factor 1, summed as magnitudes (negative: towards Center)");
+  setVector(l, p, "Center", arr<double>({}), "Radial Force: the point the forces point away from", Length::DimOrEmpty);
+  setVector(l, p, "Axis", arr<double>({}), "Radial Force, 3D: the forces point away from the line through Center along Axis (none: from the point)", Length::DimOrEmpty);
   return l;
 }
 
@@ -503,6 +508,11 @@ void solverSchema(ParameterList& so) {
   setNumber(so, "Easy Iterations", 4, "adaptive stepping: an easy step needs at most this many iterations", ints(0));
   setNumber(so, "Max Increment", 0.25, "adaptive stepping: largest load increment", reals(End::Open, 0, 1, End::Closed));
   setNumber(so, "Max Cutbacks", 4, "halvings of a load step that fails before the run stops", ints(0, kMaxCutbacks));
+  setNumber(so, "Limit Load Ratio", 100.0,
+            "load stepping without damage: a converged step whose displacement per unit load exceeds this multiple of the first "
+            "step's has jumped past a limit load (to an equilibrium far away, e.g. one only the stabilisation holds); it is cut "
+            "back, and the run stops at the limit load, naming it (exit 3; summary.json limit_load_factor); 0: no check",
+            reals(End::Closed, 0, 1e12, End::Closed, "0 or more than 1"));
   so.set("Max Total Steps", 0, "steps allowed in all, counting reduced ones (0: 20 x Load Steps; else Load Steps to " + std::to_string(kMaxTotalSteps) + ")");
   setNumber(so, "Min Increment", 1e-6, "smallest load increment, as a fraction of the nominal one", reals(End::Open, 0, 1, End::Closed));
   setNumber(so, "Round-off Floor Factor", 2.0, "a step also converges when |R| <= factor * eps * E * |unit-strain forces| (the residual's round-off level); 0 disables", nonNegative());
@@ -1673,6 +1683,25 @@ void readLoads(SceneBuild& b) {
     const auto& ids = b.region("Loads/" + name + "/Region", l.get<std::string>("Region"));
     const Vec3 value = vec3(l.get<Array<double>>("Value"));
     const std::string type = l.get<std::string>("Type");
+    const std::string key = "'Loads/" + name + "/";
+    const bool radial = type == "Radial Force";
+    const double magnitude = l.get<double>("Magnitude");
+    const auto centre = l.get<Array<double>>("Center");
+    const auto axisGiven = l.get<Array<double>>("Axis");
+    Vec3 axis = Vec3::Zero();
+    if (radial) {
+      if (value.norm() != 0) fail(b.file, key + "Value' is not used by a Radial Force; give its total as 'Magnitude'");
+      if (!std::isfinite(magnitude) || magnitude == 0) fail(b.file, key + "Magnitude' must be finite and non-zero for a Radial Force");
+      if (centre.empty()) fail(b.file, key + "Center' is needed by a Radial Force");
+      if (!axisGiven.empty()) {
+        if (b.dim != 3) fail(b.file, key + "Axis' is for 3D scenes (in 2D the forces point away from Center in the plane)");
+        axis = vec3(axisGiven);
+        if (!(axis.norm() > 0)) fail(b.file, key + "Axis' must not be zero");
+        axis.normalize();
+      }
+    } else if (magnitude != 0 || !centre.empty() || !axisGiven.empty()) {
+      fail(b.file, key + "Magnitude', 'Center' and 'Axis' belong to a Radial Force, not a " + type);
+    }
     double totalV = 0, mine = 0;  // the region's volume (owned particles, over the ranks, when distributed)
     for (int g : ids)
       if (b.owns(g)) mine += d.volume[b.problem.index(g)];
@@ -1686,7 +1715,20 @@ void readLoads(SceneBuild& b) {
         b.localFail("load '" + name + "' acts on fictitious particles; loads go on real particles");
         break;
       }
-      for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += value[c] * scale;
+      Vec3 v = value;
+      if (radial) {
+        Vec3 r = d.X[p] - vec3(centre);
+        if (b.dim == 2) r[2] = 0;
+        if (axis.norm() > 0) r -= r.dot(axis) * axis;
+        const double len = r.norm();
+        if (!(len > 1e-12 * d.dx)) {
+          b.localFail("load '" + name + "' is a Radial Force, but particle " + std::to_string(b.gid(p)) + " at " +
+                      position(d, p) + " lies on its centre (or axis): it has no direction");
+          break;
+        }
+        v = magnitude / totalV * r / len;
+      }
+      for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += v[c] * (radial ? 1.0 : scale);
     }
   }
 }
@@ -1816,6 +1858,9 @@ void readSolver(SceneBuild& b) {
   s.easyIterations = so.ranged<int>("Easy Iterations");
   s.maxIncrement = so.ranged<double>("Max Increment");
   s.maxCutbacks = so.ranged<int>("Max Cutbacks");
+  s.limitLoadRatio = so.ranged<double>("Limit Load Ratio");
+  if (s.limitLoadRatio > 0 && s.limitLoadRatio <= 1)
+    fail(b.file, "'Solver/Limit Load Ratio' must be 0 (no check) or more than 1, not " + number(s.limitLoadRatio));
   s.maxTotalSteps = so.get<int>("Max Total Steps");
   const long long segments = std::max<long long>(1, static_cast<long long>(s.loadPath.size()));
   if (s.loadSteps * segments > kMaxLoadSteps)

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -135,6 +136,9 @@ Teuchos::RCP<const Teuchos::ParameterList> LoadStepperOptions::validParameters()
     l->set("Predictor", d.predictor, "start each step from the last increment extrapolated");
     l->set("Tangent Predictor", d.tangentPredictor,
            "first step: move with the load along dx/dlambda (J dx/dlambda = -df/dlambda) before Newton");
+    l->set("Limit Load Ratio", d.limitLoadRatio,
+           "without damage: a converged step whose displacement per unit load exceeds this multiple of the first step's has "
+           "jumped past a limit load; it is cut back, and a run that cannot go on stops there, naming the limit load (0: no check)");
     return l;
   }();
   return valid;
@@ -147,7 +151,7 @@ LoadStepperOptions LoadStepperOptions::fromParameterList(const Teuchos::Paramete
     if (!valid->isParameter(name))
       throw std::invalid_argument(where + ": unknown load-stepping key '" + name + "' (known: Load Steps, Max Cutbacks, Min "
                                   "Increment, Max Total Steps, Adaptive Steps, Easy Iterations, Max Increment, Predictor, "
-                                  "Tangent Predictor)");
+                                  "Tangent Predictor, Limit Load Ratio)");
     if (list.entry(it).getAny(false).type() != valid->getEntry(name).getAny(false).type())
       throw std::invalid_argument(where + ": '" + name + "' must be of type " + valid->getEntry(name).getAny(false).typeName());
   }
@@ -162,6 +166,7 @@ LoadStepperOptions LoadStepperOptions::fromParameterList(const Teuchos::Paramete
   o.maxIncrement = l.get("Max Increment", o.maxIncrement);
   o.predictor = l.get("Predictor", o.predictor);
   o.tangentPredictor = l.get("Tangent Predictor", o.tangentPredictor);
+  o.limitLoadRatio = l.get("Limit Load Ratio", o.limitLoadRatio);
   auto bad = [&](const char* key, const std::string& what) {
     throw std::invalid_argument(where + ": '" + key + "' " + what);
   };
@@ -171,6 +176,8 @@ LoadStepperOptions LoadStepperOptions::fromParameterList(const Teuchos::Paramete
   if (o.maxTotalSteps < 0) bad("Max Total Steps", "must be 0 (20 x Load Steps) or positive");
   if (o.easyIterations < 0) bad("Easy Iterations", "must be >= 0");
   if (!(o.maxIncrement > 0 && o.maxIncrement <= 1)) bad("Max Increment", "must lie in (0, 1], not " + shown(o.maxIncrement));
+  if (!(o.limitLoadRatio == 0 || (o.limitLoadRatio > 1 && o.limitLoadRatio <= 1e12)))
+    bad("Limit Load Ratio", "must be 0 (no check) or lie in (1, 1e12], not " + shown(o.limitLoadRatio));
   if (o.maxTotalSteps == 0) o.maxTotalSteps = static_cast<int>(std::min<long long>(20LL * o.loadSteps, 2000000000LL));
   return o;
 }
@@ -362,6 +369,18 @@ bool LoadStepper::run() {
     if (!nr.converged) rec.residuals = nr.residuals;
     account(rec);
     records_.push_back(rec);
+    if (!nr.converged && rec.pastLimit) {
+      // The last attempt converged, but only far away: the body gives way at the last load it
+      // held. That is the answer of a load-controlled run past its limit load.
+      limitLoad_ = model_->loadAt(state_.loadFactor);
+      std::ostringstream s;
+      s << "reached a limit load at load factor " << limitLoad_ << " (the last converged step): a step of "
+        << std::abs(model_->loadAt(std::min(1.0, state_.loadFactor + state_.increment)) - limitLoad_) << " more, after " << cut
+        << " cut-back(s), " << nr.failure << "; Solver/Continuation = Arc Length follows the response past a limit load";
+      failure_ = s.str();
+      setLoadFactor(state_.loadFactor);
+      break;
+    }
     if (!nr.converged) {
       std::ostringstream s;
       s << "load step " << state_.step << " (load factor " << rec.loadFactor << ") failed after " << cut
@@ -424,8 +443,16 @@ NewtonResult LoadStepper::solveWithCutbacks(Thyra::VectorBase<double>& x, StepRe
     nr = counted(solve_, x);
     rec.residuals.insert(rec.residuals.end(), nr.residuals.begin(), nr.residuals.end());
     if (nr.converged) {
-      lambda = target;
-      return nr;
+      const std::string past = pastLimitLoad(x, lambda, target);
+      if (past.empty()) {
+        lambda = target;
+        return nr;
+      }
+      nr.converged = false;
+      nr.failure = past;
+      rec.pastLimit = true;
+    } else {
+      rec.pastLimit = false;
     }
     Thyra::copy(*xConverged_, Teuchos::ptrFromRef(x));
     if (cut >= options_.maxCutbacks) return nr;
@@ -553,7 +580,25 @@ bool LoadStepper::vetted(const StepRecord& rec, const NewtonResult& nr, const Th
 }
 
 // The step becomes the converged state; the increment grows back after easy steps.
+std::string LoadStepper::pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target) {
+  stepCompliance_ = 0;
+  if (options_.limitLoadRatio <= 0 || damage_) return "";  // damage has its own snap-back handling
+  const double dLoad = std::abs(model_->loadAt(target) - model_->loadAt(lambda));
+  if (!(dLoad > 0)) return "";
+  auto d = x.clone_v();
+  Thyra::Vp_StV(d.ptr(), -1.0, *xConverged_);
+  const double c = Thyra::norm_2(*d) / dLoad;
+  stepCompliance_ = c;
+  const double ref = state_.initialCompliance;
+  if (!(ref > 0) || c <= options_.limitLoadRatio * ref) return "";
+  std::ostringstream s;
+  s << "jumps to an equilibrium whose displacement per unit load is " << std::setprecision(3) << c / ref
+    << " times the first step's (above '" << options_.keyPrefix << "Limit Load Ratio' = " << options_.limitLoadRatio << ")";
+  return s.str();
+}
+
 void LoadStepper::accept(const Thyra::VectorBase<double>& x, const StepRecord& rec, const NewtonResult& nr, double previous) {
+  if (state_.initialCompliance == 0 && stepCompliance_ > 0) state_.initialCompliance = stepCompliance_;
   Thyra::copy(*xConverged_, xPrevious_.ptr());
   Thyra::copy(x, xConverged_.ptr());
   path_.push_back(state_.loadFactor);

@@ -38,10 +38,24 @@ class Springs : public Thyra::StateFuncModelEvaluatorBase<double> {
   double c;
   std::vector<double> b;
   int n() const { return static_cast<int>(k.size()); }
-  /// The exact solution of component i at lambda (Newton on the scalar cubic to round-off).
+  /// A saturating law instead of the cubic (sat > 0): g(x) = sat tanh(k x / sat) + eps k x, a
+  /// spring that gives way near the force sat and is then held by eps k alone (perfect
+  /// plasticity held by a stabilisation, in one unknown).
+  double sat = 0, eps = 0;
+  double force(int i, double x) const {
+    return sat > 0 ? sat * std::tanh(k[i] * x / sat) + eps * k[i] * x : k[i] * x + c * x * x * x;
+  }
+  double stiffness(int i, double x) const {
+    if (sat > 0) {
+      const double ch = std::cosh(k[i] * x / sat);
+      return k[i] / (ch * ch) + eps * k[i];
+    }
+    return k[i] + 3 * c * x * x;
+  }
+  /// The exact solution of component i at lambda (Newton on the scalar law to round-off).
   double exact(int i, double lambda) const {
     double x = lambda * b[i] / k[i];
-    for (int it = 0; it < 100; ++it) x -= (k[i] * x + c * x * x * x - lambda * b[i]) / (k[i] + 3 * c * x * x);
+    for (int it = 0; it < 200; ++it) x -= (force(i, x) - lambda * b[i]) / stiffness(i, x);
     return x;
   }
 
@@ -81,13 +95,13 @@ class Springs : public Thyra::StateFuncModelEvaluatorBase<double> {
     const double lambda = np_ == 0 || in.get_p(0).is_null() ? 0.0 : Thyra::get_ele(*in.get_p(0), 0);
     if (auto f = out.get_f(); !f.is_null()) {
       Thyra::DetachedVectorView<double> fv(*f);
-      for (int i = 0; i < n(); ++i) fv[i] = k[i] * x[i] + c * x[i] * x[i] * x[i] - lambda * b[i];
+      for (int i = 0; i < n(); ++i) fv[i] = force(i, x[i]) - lambda * b[i];
     }
     if (auto W = out.get_W_op(); !W.is_null()) {
       auto mv = Teuchos::rcp_dynamic_cast<Thyra::MultiVectorBase<double>>(W, true);
       Thyra::DetachedMultiVectorView<double> Wv(*mv);
       for (int i = 0; i < n(); ++i)
-        for (int j = 0; j < n(); ++j) Wv(i, j) = i == j ? k[i] + 3 * c * x[i] * x[i] : 0.0;
+        for (int j = 0; j < n(); ++j) Wv(i, j) = i == j ? stiffness(i, x[i]) : 0.0;
     }
     if (out.Np() > 0) {
       auto dfdp = out.get_DfDp(0).getMultiVector();
@@ -361,6 +375,9 @@ TEST(LoadStepper, OptionsAreValidatedWithOneSentence) {
   Teuchos::ParameterList nan;
   nan.set("Max Increment", std::nan(""));
   refused(nan, "'Max Increment' must lie in (0, 1]");
+  Teuchos::ParameterList ratio;
+  ratio.set("Limit Load Ratio", 0.5);
+  refused(ratio, "'Limit Load Ratio' must be 0 (no check) or lie in (1, 1e12]");
   // A model without a load-factor parameter is refused by the wrapper.
   EXPECT_THROW(LoadFactorModel(Teuchos::rcp(new Springs({1.0}, 0.0, {1.0}, 0))), std::invalid_argument);
 }
@@ -491,4 +508,45 @@ TEST(LoadStepper, FollowsALoadPathThroughItsCorners) {
       EXPECT_EQ(times.size(), 6u);
     }
   }
+}
+
+TEST(LoadStepper, StopsAtALimitLoadInsteadOfJumpingToAnEquilibriumOnlyTheResidualStiffnessHolds) {
+  // One saturating spring (force 1 at most, then eps = 1e-4 of its stiffness): asked for load
+  // factor 1.5 in steps of 0.1, Newton would converge past lambda = 1 to x of about 5 000. The
+  // stepper finds that the step past the limit moves 100 times more per unit load than the first
+  // and cuts it back, and stops with the limit load named.
+  auto rig = [] {
+    Rig s({1.0}, 0.0, {1.5}, 60);
+    s.springs->sat = 1.0;
+    s.springs->eps = 1e-4;
+    return s;
+  };
+  LoadStepperOptions o;
+  o.loadSteps = 15;
+  o.maxCutbacks = 8;
+  Rig s = rig();
+  LoadStepper stepper(s.model, s.solve(), o);
+  EXPECT_FALSE(stepper.run());
+  ASSERT_TRUE(std::isfinite(stepper.limitLoad())) << stepper.failure();
+  // The tangent compliance reaches 100 times the initial one at g' = k / 100: x = acosh(10),
+  // force tanh(acosh(10)) = 0.99499 (+ 3e-4 from eps), lambda = force / 1.5. The step-wise
+  // (secant) measure stops there to within the last increment, 0.1 / 2^8 of the path.
+  const double atRatio = (std::tanh(std::acosh(10.0)) + 1e-4 * std::acosh(10.0)) / 1.5;
+  EXPECT_GT(stepper.limitLoad(), atRatio - 0.02);
+  EXPECT_LT(stepper.limitLoad(), 1.0 / 1.5 + 1e-4 * 20);
+  EXPECT_NE(stepper.failure().find("reached a limit load at load factor"), std::string::npos) << stepper.failure();
+  EXPECT_NE(stepper.failure().find("Limit Load Ratio"), std::string::npos) << stepper.failure();
+  // The state kept is the last converged one, exactly on the spring's curve.
+  EXPECT_LT(maxError(*s.springs, stepper.converged(), stepper.state().loadFactor), 1e-10);
+  Thyra::ConstDetachedVectorView<double> xv(stepper.converged());
+  EXPECT_LT(xv[0], 10.0);
+  // Without the check the same run converges at every step and ends far away.
+  o.limitLoadRatio = 0;
+  Rig t = rig();
+  LoadStepper free(t.model, t.solve(), o);
+  ASSERT_TRUE(free.run()) << free.failure();
+  EXPECT_FALSE(std::isfinite(free.limitLoad()));
+  Thyra::ConstDetachedVectorView<double> xf(free.converged());
+  EXPECT_GT(xf[0], 1000.0);
+  EXPECT_LT(maxError(*t.springs, free.converged(), 1.0), 1e-10);
 }

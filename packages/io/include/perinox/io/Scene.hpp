@@ -58,6 +58,7 @@ struct SolverSettings {
   int maxIterations = 25;
   std::string lineSearch = "Full Step";
   int maxCutbacks = 4;
+  double limitLoadRatio = 100;  // LoadStepperOptions::limitLoadRatio
   int maxTotalSteps = 200;           // including reduced steps
   double minIncrement = 1e-6;        // fraction of the nominal increment
   bool predictor = true;

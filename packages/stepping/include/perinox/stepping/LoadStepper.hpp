@@ -11,6 +11,7 @@
 #include <Thyra_ModelEvaluatorDelegatorBase.hpp>
 #include <Thyra_VectorBase.hpp>
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,6 +44,7 @@ struct StepRecord {
   long long stallBrokenBonds = 0;  // damage, stall break: bonds broken because the step could not
                                    // be converged (included in brokenBonds)
   double stallStretch = 0;         // the largest stretch at that break
+  bool pastLimit = false;          // the last attempt converged past a limit load (limitLoadRatio): not recorded
   bool stallAtLimit = false;       // that break was made at a snap-back's limit load, without a failed step
   int reloadSteps = 0;             // damage: sub-steps of reloading the damaged body when Newton could
                                    // not re-equilibrate directly after a break
@@ -102,6 +104,12 @@ struct LoadStepperOptions {
                                   // prescribed motion, the tangent dx/dlambda: tangentPredictor)
   bool tangentPredictor = false;  // first step: x = x0 + dlambda dx/dlambda, J dx/dlambda = -df/dlambda
   double linearTolerance = 1e-12; // relative residual of the tangent predictor's linear solve
+  double limitLoadRatio = 100;    // without a damage policy: a converged step whose displacement
+                                  // per unit load (|dx| / |d load factor|) exceeds this multiple of
+                                  // the first accepted step's jumped past a limit load (to a far
+                                  // equilibrium, e.g. one only the stabilisation holds): it is cut
+                                  // back like a failed one, and a run that cannot go on stops at the
+                                  // limit load (limitLoad()); 0: no check
   std::vector<double> stops;      // load factors in (0, 1), ascending, that steps land on exactly;
                                   // the step after one starts from the converged state (no
                                   // extrapolation across a corner of a load path)
@@ -109,7 +117,7 @@ struct LoadStepperOptions {
 
   /// The parameter list the options are read from: "Load Steps", "Max Cutbacks", "Min Increment",
   /// "Max Total Steps", "Adaptive Steps", "Easy Iterations", "Max Increment", "Predictor",
-  /// "Tangent Predictor".
+  /// "Tangent Predictor", "Limit Load Ratio".
   static Teuchos::RCP<const Teuchos::ParameterList> validParameters();
   /// Reads and checks a list (unknown keys, wrong types, values out of range): throws
   /// std::invalid_argument with one sentence starting with `where`.
@@ -205,6 +213,9 @@ struct StepperState {
   // The last re-equilibration found the damaged body's limit load (a snap-back): the state is at
   // that limit, to the damage policy's reload tolerance.
   bool atLimit = false;
+  // |dx| / |d load factor| of the first accepted step that moved the load (0: none yet), the
+  // reference of LoadStepperOptions::limitLoadRatio.
+  double initialCompliance = 0.0;
 };
 
 class LoadStepper {
@@ -237,6 +248,9 @@ class LoadStepper {
   const Thyra::VectorBase<double>& converged() const { return *xConverged_; }
   const Thyra::VectorBase<double>& previous() const { return *xPrevious_; }
   const std::string& failure() const { return failure_; }
+  /// The model's load factor of the last converged step when the run stopped at a limit load
+  /// (LoadStepperOptions::limitLoadRatio); NaN otherwise.
+  double limitLoad() const { return limitLoad_; }
 
  private:
   // The named steps of run(), in order.
@@ -270,6 +284,11 @@ class LoadStepper {
   std::vector<double> path_;
   Teuchos::RCP<Thyra::VectorBase<double>> xConverged_, xPrevious_;
   std::string failure_;
+  double limitLoad_ = std::numeric_limits<double>::quiet_NaN();
+  double stepCompliance_ = 0.0;  // |dx| / |d load factor| of the step under way's converged solve
+  /// "" when the converged solve x from the converged state at pseudo-time lambda to target
+  /// stays within the limit-load ratio (and records its compliance), else why not.
+  std::string pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target);
   // Work of the step under way (every solve call in it).
   long long stepWork_ = 0;
   LinearSolveCounts stepLinear_;
