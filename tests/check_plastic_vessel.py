@@ -18,7 +18,12 @@ elastic response is checked at the first step through the bore point's displacem
 
     check_plastic_vessel.py OUTDIR --shape cylinder|sphere --E 200e9 --nu 0.3 --yield 250e6
         --p-ref 250e6 --inner 1 --outer 2 --probe-radius 1.025
-        [--yield-tol 0.03] [--limit-tol 0.03] [--stiffness-tol 0.03]
+        [--yield-tol 0.03] [--limit-tol 0.03] [--stiffness-tol 0.03] [--arc]
+
+With --arc (an arc-length run, Solver/Continuation = Arc Length, past the limit) it checks the
+plateau instead: the run reaches its target deflection, at least 3 times the deflection where
+the load first came within 3 % of the limit pressure, the load stays within --limit-tol of it
+from there on, and the plateau's slope is below 1/300 of the elastic stiffness.
 """
 import argparse
 import csv
@@ -44,6 +49,39 @@ def lame(shape, p, a, b, r, E, nu):
     return vm, u
 
 
+def check_plateau(o, rows, summary, p_limit, failures):
+    """Arc length past the limit load: the run converges to its target deflection, several times
+    the deflection at which the load first came within 3 % of the limit (the knee); along the
+    plateau from the knee on the load stays within the limit tolerance of the closed form and
+    its slope is a small fraction of the elastic stiffness (what is left is the stabilisation)."""
+    if not summary.get("converged"):
+        failures.append("the arc-length run did not reach its target: " + summary.get("failure", "?"))
+        return
+    lam = [float(r["load_factor"]) for r in rows]
+    d = [float(r["bore_point_x"]) for r in rows]
+    knee = next((k for k, v in enumerate(lam) if v * o.p_ref >= 0.97 * p_limit), None)
+    if knee is None:
+        failures.append("the load never came within 3 %% of the limit pressure (largest %.4f sigma_y)" % (max(lam) * o.p_ref / o.sy))
+        return
+    ratio = d[-1] / d[knee]
+    print("plateau from deflection %.4g (load %.4f sigma_y) to %.4g (%.1fx), load %.4f .. %.4f sigma_y; closed form %.4f"
+          % (d[knee], lam[knee] * o.p_ref / o.sy, d[-1], ratio, min(lam[knee:]) * o.p_ref / o.sy,
+             max(lam[knee:]) * o.p_ref / o.sy, p_limit / o.sy))
+    if ratio < 3:
+        failures.append("the run ended at %.1fx the knee's deflection; it should go well past the limit" % ratio)
+    for k in range(knee, len(lam)):
+        e = lam[k] * o.p_ref / p_limit - 1
+        if abs(e) > o.limit_tol:
+            failures.append("step %s: load %.4f sigma_y is %+.2f %% from the limit pressure (tolerance %.1f %%)"
+                            % (rows[k]["step"], lam[k] * o.p_ref / o.sy, 100 * e, 100 * o.limit_tol))
+            break
+    elastic = lam[0] / d[0]
+    slope = (lam[-1] - lam[knee + 1]) / (d[-1] - d[knee + 1]) if len(lam) > knee + 2 else 0.0
+    print("plateau slope %.3g of the elastic stiffness" % (slope / elastic))
+    if not slope / elastic < 1.0 / 300:
+        failures.append("the plateau's slope is %.3g of the elastic stiffness (at most 1/300)" % (slope / elastic))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("outdir")
@@ -58,6 +96,8 @@ def main():
     ap.add_argument("--yield-tol", type=float, default=0.03)
     ap.add_argument("--limit-tol", type=float, default=0.03)
     ap.add_argument("--stiffness-tol", type=float, default=0.03)
+    ap.add_argument("--arc", action="store_true",
+                    help="an arc-length run past the limit: checks the plateau instead of first yield and the limit stop")
     o = ap.parse_args()
     a, b = o.inner, o.outer
     failures = []
@@ -84,6 +124,14 @@ def main():
         failures.append("the first step already yields; it cannot show the elastic stiffness")
     elif abs(e_u) > o.stiffness_tol:
         failures.append("elastic bore displacement off by %.2f %% (tolerance %.1f %%)" % (100 * e_u, 100 * o.stiffness_tol))
+
+    if o.arc:
+        check_plateau(o, rows, summary, p_limit, failures)
+        if failures:
+            print("FAIL: " + "; ".join(failures))
+            sys.exit(1)
+        print("OK")
+        return
 
     # First yield: bracketed by consecutive steps.
     before, first = 0.0, None
