@@ -288,3 +288,23 @@ perinox_bad_mesh(blocks_exodus_name_unknown bimaterial_bar_exodus.xml "block 'so
   --set "Blocks/soft/Name=middle")
 perinox_bad_mesh(blocks_exodus_box bimaterial_bar_exodus.xml "'Blocks/stiff/Box Min' is for lattices"
   --set "Blocks/stiff/Box Min={1, 0, 0}" --set "Blocks/stiff/Box Max={2, 1, 1}")
+
+# Nearest ties: (1.0, 0.25) is equally near the particles at (0.95, 0.25) and (1.05, 0.25) of the
+# quad plate. Read from the Exodus mesh, from its particle file and from that file reversed, on
+# 1 and 3 ranks, the 'Nearest' probe there picks the same particle (the smaller x), so the runs
+# agree; with the old rule (the first particle in file order) the reversed file picked the other.
+set(NEAREST_TIE "Regions/tie/Type=Nearest" "Regions/tie/Point={1.0, 0.25}" "Probes/tie/Region=tie")
+add_test(NAME exodus_quad_points_reversed_setup COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/reverse_particle_file.py
+  ${EXO_DIR}/quad_points.txt ${EXO_DIR}/quad_points_reversed.txt)
+set_tests_properties(exodus_quad_points_reversed_setup PROPERTIES LABELS unit FIXTURES_REQUIRED exodus_meshes
+  FIXTURES_SETUP quad_reversed)
+perinox_exodus_run(NAME nearest_tie_exodus SCENE quad_exodus.xml NP 1 SETS ${NEAREST_TIE})
+perinox_exodus_run(NAME nearest_tie_exodus_np3 SCENE quad_exodus.xml NP 3 SETS ${NEAREST_TIE})
+perinox_exodus_run(NAME nearest_tie_points_reversed SCENE quad_points.xml NP 1
+  SETS ${NEAREST_TIE} "Discretization/Particle File=quad_points_reversed.txt")
+set_tests_properties(nearest_tie_points_reversed PROPERTIES FIXTURES_REQUIRED "exodus_meshes;quad_reversed")
+foreach(other nearest_tie_exodus_np3 nearest_tie_points_reversed)
+  add_test(NAME ${other}_compare COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/compare_runs.py
+    --rtol 1e-10 ${PERINOX_TEST_OUT}/nearest_tie_exodus ${PERINOX_TEST_OUT}/${other})
+  set_tests_properties(${other}_compare PROPERTIES LABELS unit FIXTURES_REQUIRED "nearest_tie_exodus;${other}")
+endforeach()

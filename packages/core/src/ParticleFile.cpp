@@ -2,6 +2,7 @@
 #include "perinox/core/Discretization.hpp"
 #include "perinox/core/InputFile.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cmath>
@@ -135,6 +136,29 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
   finish(d);
   if (families) buildFamilies(d);
   return d;
+}
+
+double particleFileSpacing(const std::string& path, int dim, double thickness) {
+  Discretization d = emptyParticleSet(path, dim, 1.0, 1.0, thickness);  // horizon and spacing unused here
+  std::ifstream in = openParticleFile(path);
+  std::vector<double> volumes;
+  std::string text;
+  long lineNo = 0;
+  while (std::getline(in, text)) {
+    parseLine(path, ++lineNo, text, d);
+    if (!d.volume.empty()) {
+      volumes.push_back(d.volume.back());
+      d.X.clear();
+      d.volume.clear();
+      d.block.clear();
+    }
+  }
+  if (in.bad()) fail(path, lineNo, "read error");
+  if (volumes.empty()) fail(path, lineNo, "no particles in file");
+  const auto mid = volumes.begin() + static_cast<std::ptrdiff_t>(volumes.size() / 2);
+  std::nth_element(volumes.begin(), mid, volumes.end());
+  const double cell = *mid / (dim == 3 ? 1.0 : thickness);  // 1D: a length, 2D: an area, 3D: a volume
+  return dim == 1 ? cell : dim == 2 ? std::sqrt(cell) : std::cbrt(cell);
 }
 
 std::uint64_t particleFileSize(const std::string& path) {

@@ -1,6 +1,7 @@
 // Region selection: boxes, boundary layers, fictitious layers, nearest particle.
 #include "perinox/core/Discretization.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -68,17 +69,35 @@ std::vector<int> selectFictitiousSide(const Discretization& d, Side s) {
   return out;
 }
 
-int selectNearest(const Discretization& d, const Vec3& p, Population who) {
+namespace {
+double distanceTo(const Discretization& d, int i, const Vec3& p) {
+  double dist2 = 0.0;
+  for (int a = 0; a < d.dim; ++a) dist2 += (d.X[i][a] - p[a]) * (d.X[i][a] - p[a]);
+  return std::sqrt(dist2);
+}
+}  // namespace
+
+double nearestDistance(const Discretization& d, const Vec3& p, Population who) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < d.size(); ++i)
+    if (inPopulation(d, i, who)) best = std::min(best, distanceTo(d, i, p));
+  return best;
+}
+
+bool positionBefore(const Vec3& a, const Vec3& b, int dim) {
+  for (int c = 0; c < dim; ++c)
+    if (a[c] != b[c]) return a[c] < b[c];
+  return false;
+}
+
+int selectNearest(const Discretization& d, const Vec3& p, Population who, double nearest) {
+  if (nearest < 0) nearest = nearestDistance(d, p, who);
+  if (!std::isfinite(nearest)) return -1;
+  const double tie = nearest + 1e-9 * std::max(nearest, d.dx);
   int best = -1;
-  double bestDist2 = std::numeric_limits<double>::infinity();
   for (int i = 0; i < d.size(); ++i) {
-    if (!inPopulation(d, i, who)) continue;
-    double dist2 = 0.0;
-    for (int a = 0; a < d.dim; ++a) dist2 += (d.X[i][a] - p[a]) * (d.X[i][a] - p[a]);
-    if (dist2 < bestDist2) {  // strict: ties keep the lowest id
-      bestDist2 = dist2;
-      best = i;
-    }
+    if (!inPopulation(d, i, who) || distanceTo(d, i, p) > tie) continue;
+    if (best < 0 || positionBefore(d.X[i], d.X[best], d.dim)) best = i;
   }
   return best;
 }

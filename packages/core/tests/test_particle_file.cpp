@@ -101,3 +101,19 @@ TEST(ParticleFile, MissingFileAndBadParameters) {
   EXPECT_THROW(readParticleFile(path, 4, 1.0, 1.0, 1.0), std::runtime_error);
   std::remove(path.c_str());
 }
+
+TEST(ParticleFile, SpacingFromTheMedianVolume) {
+  // Five particles: the median volume is the third smallest, whatever the order and the outliers.
+  const std::string path = writeTemp("# five\n0 0 0 0.08\n1 0 0 0.0001\n2 0 0 0.02 3\n3 0 0 0.02\n4 0 0 5.0\n");
+  EXPECT_DOUBLE_EQ(particleFileSpacing(path, 1, 0.5), 0.04);                 // 1D: volume / area
+  EXPECT_DOUBLE_EQ(particleFileSpacing(path, 2, 0.5), std::sqrt(0.04));      // 2D: (volume / thickness)^(1/2)
+  EXPECT_DOUBLE_EQ(particleFileSpacing(path, 3, 0.5), std::cbrt(0.02));      // 3D: volume^(1/3)
+  // The whole file is checked: a bad line further down is reported with its number.
+  const std::string bad = writeTemp("0 0 0 1\n1 0 0 -1\n");
+  try {
+    particleFileSpacing(bad, 2, 1.0);
+    ADD_FAILURE() << "accepted a negative volume";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(":2: volume must be positive"), std::string::npos) << e.what();
+  }
+}

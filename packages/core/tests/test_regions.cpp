@@ -49,18 +49,33 @@ TEST(Regions, NearestToFreeEndMidHeight) {
   EXPECT_EQ(selectNearest(d, Vec3(10, 0.5, 0), Population::Fictitious), -1);  // none exist
 }
 
-TEST(Regions, NearestTieGoesToLowestId) {
+TEST(Regions, NearestTieGoesToTheSmallestPositionWhateverTheOrder) {
+  // (0.5, 0) is equally near (0, 0) and (1, 0): the tie goes to the smaller x, in either order.
   Discretization d;
   d.dim = 2;
+  d.dx = 1;
   d.X = {Vec3(1, 0, 0), Vec3(0, 0, 0), Vec3(5, 5, 0)};
   d.fictitious = {0, 0, 1};
   d.sideMask = {0, 0, 1};
-  EXPECT_EQ(selectNearest(d, Vec3(0.5, 0, 0), Population::All), 0);
+  EXPECT_EQ(selectNearest(d, Vec3(0.5, 0, 0), Population::All), 1);
   d.X = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(5, 5, 0)};
   EXPECT_EQ(selectNearest(d, Vec3(0.5, 0, 0), Population::All), 0);
   EXPECT_EQ(selectNearest(d, Vec3(0.5, 0, 0), Population::Fictitious), 2);
+  // Equal x: the smaller y; a distance that differs only by round-off (0.1 + 0.2 against 0.3) still ties.
+  d.X = {Vec3(0.3, 1, 0), Vec3(0.3, -1, 0), Vec3(5, 5, 0)};
+  EXPECT_EQ(selectNearest(d, Vec3(0.3, 0, 0), Population::All), 1);
+  d.X = {Vec3(0.1 + 0.2, 0, 0), Vec3(-0.3, 0, 0), Vec3(5, 5, 0)};
+  EXPECT_EQ(selectNearest(d, Vec3(0, 0, 0), Population::All), 1);
+  // A particle nearer by more than the tie tolerance wins whatever its position.
+  d.X = {Vec3(0.3, 0, 0), Vec3(-0.3 - 1e-6, 0, 0), Vec3(5, 5, 0)};
+  EXPECT_EQ(selectNearest(d, Vec3(0, 0, 0), Population::All), 0);
   // Unused axes of the query point are ignored in 2D.
+  d.X = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(5, 5, 0)};
   EXPECT_EQ(selectNearest(d, Vec3(4.9, 4.9, 100), Population::Real), 1);
+  // A caller holding part of a body passes the nearest distance over all parts: a part whose own
+  // particles are all farther has no candidate.
+  EXPECT_EQ(selectNearest(d, Vec3(0.5, 0, 0), Population::All, 0.1), -1);
+  EXPECT_DOUBLE_EQ(nearestDistance(d, Vec3(0.5, 0, 0), Population::All), 0.5);
 }
 
 TEST(Regions, BoxIsClosedAndFiltersPopulation) {

@@ -269,7 +269,7 @@ ParameterList regionTemplate() {
                         "Box/Nearest: ");
   setChoice(r, "Side", "xmin", sideChoices(), "Side Layer / Fictitious Side: ", " (a side of the body's dimension)");
   setNumber(r, "Thickness", 0.0, "Side Layer: layer thickness", nonNegative("0: one particle spacing"));
-  setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point", Length::Dim);
+  setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point; particles equally near (to 1e-9) tie, and a tie goes to the smallest x, then y, then z (not to the particle order or the ranks)", Length::Dim);
   r.set("Name", "", "Node Set / Side Set / Block: the set's or Exodus block's name in the mesh (give Name or Id)");
   r.set("Id", -1, "Node Set / Side Set / Block: the set's or block's id (>= 0; -1: none, give Name)");
   return r;
@@ -390,7 +390,7 @@ void discretizationSchema(ParameterList& d) {
   setVector(d, dp, "Particles", arr<int>({}),
             "Lattice: particles per axis, each >= 1, at most " + std::to_string(kMaxParticles) + " lattice sites in all with the fictitious layers; or give Spacing",
             Length::DimOrEmpty);
-  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing; Exodus: nominal spacing (0: the median element's edge, volume^(1/3), 2D (area)^(1/2))");
+  d.set("Spacing", 0.0, "Lattice: spacing instead of Particles (must divide the box evenly); Particle File: nominal spacing (0: the median particle's, volume^(1/3), 2D (volume / Thickness)^(1/2), 1D volume / Thickness); Exodus: nominal spacing (0: the median element's edge, volume^(1/3), 2D (area)^(1/2))");
   d.set("Horizon Factor", 3.015, "horizon delta = factor * spacing (1 <= factor <= " + number(kMaxHorizonFactor) + ")");
   d.set("Horizon", 0.0, "Particle File, Exodus: absolute horizon (overrides Horizon Factor when > 0; spacing <= horizon <= " + number(kMaxHorizonFactor) + " x spacing)");
   setNumber(d, "Thickness", 1.0, "2D: out-of-plane thickness h; 1D: cross-section area A", positive());
@@ -1341,10 +1341,13 @@ double particleHorizon(const Section& dl, double spacing, const std::string& spa
 ParticleFileSpec particleFile(const SceneBuild& b, const Section& dl, double thickness) {
   std::string path = dl.get<std::string>("Particle File");
   if (path.empty()) fail(b.file, "'Discretization/Particle File' is required when Type = Particle File");
-  const double spacing = dl.get<double>("Spacing");
-  if (!(spacing > 0)) fail(b.file, "'Discretization/Spacing' (the nominal spacing) is required for a particle file");
+  const double given = dl.get<double>("Spacing");
+  if (given < 0) fail(b.file, "'Discretization/Spacing' must be positive (or 0: from the particles' volumes)");
   if (dl.get<double>("Horizon") < 0) fail(b.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
-  return {b.relativeToScene(path), b.dim, particleHorizon(dl, spacing, ""), spacing, thickness};
+  path = b.relativeToScene(path);
+  // Not given: the spacing the volumes imply (every rank reads the file's volumes once).
+  const double spacing = given > 0 ? given : particleFileSpacing(path, b.dim, thickness);
+  return {path, b.dim, particleHorizon(dl, spacing, given > 0 ? "" : ", the spacing taken from the particles' volumes"), spacing, thickness};
 }
 
 Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
@@ -1588,17 +1591,26 @@ std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::
     ids = selectFictitiousSide(d, side());
   } else if (type == "Nearest") {
     const Vec3 point = vec3(r.get<Array<double>>("Point"));
-    const int p = selectNearest(d, point, pop);
     if (!b.distributed()) {
+      const int p = selectNearest(d, point, pop);
       if (p >= 0) ids.push_back(p);
-    } else {  // the nearest over the ranks' shares (ties: the lowest global id, as on the whole body)
-      double mine = std::numeric_limits<double>::infinity(), best = mine;
-      if (p >= 0) {
-        mine = 0;
-        for (int a = 0; a < d.dim; ++a) mine += (d.X[p][a] - point[a]) * (d.X[p][a] - point[a]);
+    } else {
+      // The nearest over the ranks' shares, with the tie rule of the whole body: the nearest
+      // distance over the ranks, each rank's first candidate in position order, and the first
+      // of those over the ranks (coordinate by coordinate); then its global id.
+      const double mine = nearestDistance(d, point, pop);
+      double nearest = mine;
+      Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(nearest));
+      const int p = selectNearest(d, point, pop, nearest);
+      constexpr double none = std::numeric_limits<double>::infinity();
+      bool candidate = p >= 0;
+      for (int c = 0; c < d.dim; ++c) {
+        const double x = candidate ? d.X[p][c] : none;
+        double least = x;
+        Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, x, Teuchos::outArg(least));
+        candidate = candidate && x == least;
       }
-      Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, mine, Teuchos::outArg(best));
-      long long id = p >= 0 && mine == best ? b.gid(p) : std::numeric_limits<long long>::max(), first = id;
+      long long id = candidate ? b.gid(p) : std::numeric_limits<long long>::max(), first = id;
       Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_MIN, id, Teuchos::outArg(first));
       if (first != std::numeric_limits<long long>::max() && b.problem.holds(first)) ids.push_back(b.problem.index(first));
     }

@@ -87,6 +87,11 @@ Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::in
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
                                 double thickness, bool families = true);
 
+/// The nominal spacing a particle file's volumes imply: the median particle's volume as a
+/// length (1D: volume / thickness, the cross-section area), an area's side (2D: volume /
+/// thickness) or a cube's edge (3D). Reads (and checks) the whole file.
+double particleFileSpacing(const std::string& path, int dim, double thickness);
+
 /// A particle file read in parts (one MPI rank's share of its bytes, problemOnLocalParticleFile):
 /// its size in bytes; the newlines in the bytes [begin, end); and the particles of the lines that
 /// start in [begin, end), as readParticleFile reads them (no families; the box is of these
@@ -110,7 +115,15 @@ std::vector<int> selectBox(const Discretization& d, const Vec3& lo, const Vec3& 
 std::vector<int> selectSideLayer(const Discretization& d, Side s, double thickness);
 /// Fictitious particles in the layer of side s.
 std::vector<int> selectFictitiousSide(const Discretization& d, Side s);
-/// The particle (of the population) nearest to p; ties go to the lowest id. -1 if none.
-int selectNearest(const Discretization& d, const Vec3& p, Population who);
+/// The distance from p to the nearest particle of the population (infinity if none).
+double nearestDistance(const Discretization& d, const Vec3& p, Population who);
+/// The particle (of the population) nearest to p, -1 if none. Particles as near as the nearest
+/// (to 1e-9 of the distance or of the spacing) tie; a tie goes to the smallest x, then y, then z:
+/// a rule that depends neither on the particles' order nor on how they are split among ranks.
+/// `nearest`: the distance to compare with (a caller that holds part of the body passes the
+/// nearest distance over all parts); negative: this discretisation's own nearestDistance.
+int selectNearest(const Discretization& d, const Vec3& p, Population who, double nearest = -1);
+/// Whether a lies before b in the tie-break order of selectNearest (x, then y, then z).
+bool positionBefore(const Vec3& a, const Vec3& b, int dim);
 
 }  // namespace perinox
