@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Checks a thick-walled pressure vessel run (xml/plastic_cylinder.xml, xml/plastic_sphere.xml)
+"""Checks a thick-walled pressure vessel run (xml/plastic_cylinder.xml, or a sphere of docs/plasticity.md)
 against the closed forms of an elastic-perfectly plastic von Mises wall a <= r <= b under an
 internal pressure p = lambda * p_ref (small strain):
 

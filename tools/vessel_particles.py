@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Particle file of a thick-walled cylinder (2D, plane strain) or sphere (3D), for the pressure
-vessel scenes xml/plastic_cylinder.xml and xml/plastic_sphere.xml.
+vessel scene xml/plastic_cylinder.xml and the thick-sphere study of docs/plasticity.md.
 
 The wall a <= r <= b is cut into shells of width dr = (b - a) / shells; each shell is split along
 its mid-radius into cells of arc length close to dr. 2D: 4 round(2 pi r / (4 dr)) equal angles
