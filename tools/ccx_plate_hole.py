@@ -81,15 +81,18 @@ def mesh(R):
     return nodes, elems
 
 
-def fe_solution(R, work, threads):
+def quarter_input(R, element, title):
+    """The quarter plate as CalculiX input lines: its nodes, `element` elements (CPE8, CPE8R) in
+    ELSET EALL and the node sets NX0 (x = 0), NY0 (y = 0) and NEND (x = 75); with the mesh's
+    nodes, elements, the used node keys in id order and their ids."""
     nodes, elems = mesh(R)
     used = {k for c in elems for k in c}  # the element centres of the grids are not nodes
     keys = sorted(used, key=lambda k: (k[1], k[0]))
     ids = {k: n + 1 for n, k in enumerate(keys)}
-    L = ["** tools/ccx_plate_hole.py, quarter plate, CPE8", "*NODE, NSET=NALL"]
+    L = ["** %s, quarter plate, %s" % (title, element), "*NODE, NSET=NALL"]
     for k in keys:
         L.append("%d, %.12g, %.12g" % (ids[k], nodes[k][0], nodes[k][1]))
-    L.append("*ELEMENT, TYPE=CPE8, ELSET=EALL")
+    L.append("*ELEMENT, TYPE=%s, ELSET=EALL" % element)
     for e, c in enumerate(elems, 1):
         L.append("%d, " % e + ", ".join(str(ids[k]) for k in c))
 
@@ -101,6 +104,11 @@ def fe_solution(R, work, threads):
     nset("NX0", lambda p: abs(p[0]) < 1e-9)
     nset("NY0", lambda p: abs(p[1]) < 1e-9)
     nset("NEND", lambda p: abs(p[0] - HX) < 1e-9)
+    return L, nodes, elems, keys, ids
+
+
+def fe_solution(R, work, threads):
+    L, nodes, elems, keys, ids = quarter_input(R, "CPE8", "tools/ccx_plate_hole.py")
     L += ["*MATERIAL, NAME=MAT", "*ELASTIC", "%g, %g" % (E, NU),
           "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT", "1.0",
           "*STEP", "*STATIC", "*BOUNDARY", "NX0, 1, 1, 0.0", "NY0, 2, 2, 0.0",

@@ -28,7 +28,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ccx_plate_hole import HX, R_HOLE, mesh  # noqa: E402  (the quarter plate's mesh)
+from ccx_plate_hole import quarter_input  # noqa: E402  (the quarter plate's mesh and node sets)
 from ccx_seed001 import run_ccx  # noqa: E402
 
 E, NU, SY, H, UEND = 210000.0, 0.33, 250.0, 2000.0, 0.3
@@ -85,25 +85,7 @@ def main():
     work = a.keep or tempfile.mkdtemp(prefix="plate_hole_plastic_", dir="/tmp")
     os.makedirs(work, exist_ok=True)
 
-    nodes, elems = mesh(a.refine)
-    used = {k for c in elems for k in c}
-    keys = sorted(used, key=lambda k: (k[1], k[0]))
-    ids = {k: n + 1 for n, k in enumerate(keys)}
-    L = ["** tools/ccx_plate_hole_plastic.py, quarter plate, CPE8R", "*NODE, NSET=NALL"]
-    for k in keys:
-        L.append("%d, %.12g, %.12g" % (ids[k], nodes[k][0], nodes[k][1]))
-    L.append("*ELEMENT, TYPE=CPE8R, ELSET=EALL")
-    for e, c in enumerate(elems, 1):
-        L.append("%d, " % e + ", ".join(str(ids[k]) for k in c))
-
-    def nset(name, sel):
-        L.append("*NSET, NSET=%s" % name)
-        s = sorted(ids[k] for k in keys if sel(nodes[k]))
-        L.extend(", ".join(str(v) for v in s[i:i + 12]) for i in range(0, len(s), 12))
-
-    nset("NX0", lambda p: abs(p[0]) < 1e-9)
-    nset("NY0", lambda p: abs(p[1]) < 1e-9)
-    nset("NEND", lambda p: abs(p[0] - HX) < 1e-9)
+    L, nodes, elems, keys, ids = quarter_input(a.refine, "CPE8R", "tools/ccx_plate_hole_plastic.py")
     L += ["*MATERIAL, NAME=MAT", "*ELASTIC", "%g, %g" % (E, NU), "*PLASTIC", "%g, 0.0" % SY, "%g, 1.0" % (SY + H),
           "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT", "1.0",
           "*BOUNDARY", "NX0, 1, 1, 0.0", "NY0, 2, 2, 0.0", "NEND, 2, 2, 0.0"]
