@@ -173,10 +173,27 @@ TEST(ArcLengthStepper, PassesTheLimitPointThatLoadSteppingCannot) {
     auto newton = Teuchos::rcp(new NewtonSolver(r.model, r.scale, no));
     LoadStepperOptions lo;
     lo.loadSteps = 10;
+    lo.limitLoadRatio = 0;  // no limit-load check: Newton fails past the peak
     LoadStepper stepper(r.model, [newton](Thyra::VectorBase<double>& x) { return newton->solve(x); }, lo);
     EXPECT_FALSE(stepper.run());
     EXPECT_LT(stepper.state().loadFactor, peak);
     EXPECT_NE(stepper.failure().find("failed after"), std::string::npos) << stepper.failure();
+  }
+  {
+    // With the check (the default) the stepper says it reached a limit load: just below the peak
+    // (measured 0.735547 against 0.735759), where the next step would land on the falling branch.
+    Rig r(0.5);
+    NewtonOptions no;
+    no.tolerance = 1e-12;
+    auto newton = Teuchos::rcp(new NewtonSolver(r.model, r.scale, no));
+    LoadStepperOptions lo;
+    lo.loadSteps = 10;
+    LoadStepper stepper(r.model, [newton](Thyra::VectorBase<double>& x) { return newton->solve(x); }, lo);
+    EXPECT_FALSE(stepper.run());
+    ASSERT_TRUE(std::isfinite(stepper.limitLoad())) << stepper.failure();
+    EXPECT_NE(stepper.failure().find("reached a limit load at load factor"), std::string::npos) << stepper.failure();
+    EXPECT_LT(stepper.limitLoad(), peak);
+    EXPECT_GT(stepper.limitLoad(), (1 - 1e-3) * peak);
   }
   Rig r(0.5);
   ArcLengthStepper arc(r.model, r.scale, pathOptions());
