@@ -36,7 +36,7 @@ def main(out):
     ys_all = [r["y"] + r["uy"] for r in real]
     width = (max(xs_all) - min(xs_all)) or 1.0
     height = (max(ys_all) - min(ys_all)) or 1.0
-    slender = width / height > 4  # beams: stack the panels and stretch the vertical axis
+    slender = width / height > 4  # beams: stack the panels (the axes stay equal: no squeezed body)
     panels = [("sxx", "Cauchy stress sigma_xx"), ("umag", "|u|")]
     if any(r.get("damage", 0) > 0 for r in real):
         panels.append(("damage", "damage index phi"))
@@ -44,7 +44,9 @@ def main(out):
         panels.append(("eqps", "equivalent plastic strain"))
     n = len(panels)
     if slender:
-        fig, axes = plt.subplots(n, 1, figsize=(12, 3.3 * n))
+        # A panel as tall as the body at 12 inches wide, plus room for the title and colour bar.
+        fig, axes = plt.subplots(n, 1, figsize=(12, n * (min(3.3, 10.0 * height / width) + 1.2)), squeeze=False)
+        axes = axes[:, 0]
     else:
         fig, axes = plt.subplots(1, n, figsize=(6 * n, 4.5))
     for ax, (key, label) in zip(axes, panels):
@@ -58,12 +60,10 @@ def main(out):
         sc = ax.scatter(xs, ys, c=cs, s=12, cmap="jet", **kw)
         if fict:
             ax.scatter([r["x"] + r["ux"] for r in fict], [r["y"] + r["uy"] for r in fict], c="0.6", s=8, marker="s")
-        if slender:
-            ax.set_aspect("auto")
-            ax.set_title(label + " (vertical scale exaggerated)")
-        else:
-            ax.set_aspect("equal")
-            ax.set_title(label)
+        ax.set_aspect("equal")
+        ax.set_title(label)
+        ax.set_xlabel("x + u_x (scene length unit)")
+        ax.set_ylabel("y + u_y")
         fig.colorbar(sc, ax=ax, shrink=0.8)
     status = "converged" if summary["converged"] else "NOT converged"
     fig.suptitle(f"{summary.get('title', '')} ({status}, final load factor {summary['steps'][-1]['load_factor']:.3g})")
