@@ -40,7 +40,7 @@ struct RunOptions {
   std::string outputDir = "out";
   bool quiet = false;       // no progress lines
   std::string plotScript;   // python script that draws PNGs from the output folder ("" = none)
-  // Checkpoints of load stepping (for runs longer than a job or a session): after a converged
+  // Checkpoints of load stepping (for runs longer than a batch job may last): after a converged
   // step, every checkpointSteps steps and/or once checkpointSeconds of wall time have passed
   // since the last one, into checkpointDir (default: the output folder + ".checkpoint"). Each
   // replaces the previous one only when complete.

@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
         const Row r = timeModel(model, u, tangent, n > 200000 ? 3 : 5);
         const double bytesR = bonds * (4 + 24 + 8 + 8 * dim) + (8 + 24 + 8 + 8 * dim);
         const double bytesJ = bonds * (4 + 24 + 8 + 8 * dim + 24 * dim) + (8 + 24 + 8 + 8 * dim * 3);
-        // Memory on one rank: the assembled Jacobian as the evaluator stores it since session 4
+        // Memory on one rank: the assembled Jacobian as the evaluator stores it
         // (one owned CRS copy, summed in place; ghost rows, absent on one rank, come on top on
         // several: 8-byte value + 4-byte column index per entry), from the interior row length
         // (an upper bound: boundary rows are shorter); the matrix-free solve keeps the model

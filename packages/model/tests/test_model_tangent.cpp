@@ -792,7 +792,7 @@ TEST(Model, GatheredProductKeepsDigitsOnLargeBodies) {
   }
 }
 
-// An irregular body like Peridigm's tensile test (docs/performance.md, session 21): 3D particles
+// An irregular body like Peridigm's tensile test (docs/performance.md, "The auxiliary cycle from level 1, and the last Newton system"): 3D particles
 // jittered by up to 0.3 spacings with volumes varying by +-30 %, horizon 2.52 spacings, weak
 // stabilisation (G = 0.02), at a small-strain state (0.5 % stretch plus noise) and at a large one.
 // The element tangent against central differences (1e-6, as TangentFD), and both forms of the

@@ -484,7 +484,7 @@ class Checker {
 
 void validateLinearSolverList(const Teuchos::ParameterList& stratimikos, const std::string& where) {
   // Stratimikos' valid list with perinox's strategies (Ifpack2, MueLu, MUMPS) registered, built
-  // afresh (about a millisecond) so that no Trilinos object outlives the caller's MPI session.
+  // afresh (about a millisecond) so that no Trilinos object outlives the caller's MPI environment (MPI_Finalize).
   const Teuchos::RCP<const Teuchos::ParameterList> valid = validLinearSolverParameters();
   Checker(where).top(stratimikos, *valid);
   // A MUMPS preconditioner that renews its factors during a solve changes between Krylov

@@ -352,7 +352,7 @@ NewtonResult NewtonSolver::solve(Thyra::VectorBase<double>& x) {
       // A linear residual of a tenth of the tolerance is enough there: the system is solved to
       // at least 0.1 tol / r_k, capped at the forcing term's maximum (Kelley's safeguard,
       // "Iterative Methods for Linear and Nonlinear Equations", 6.3; docs/performance.md,
-      // session 21).
+      // "The auxiliary cycle from level 1, and the last Newton system").
       const double cap = forcingTermMaximum(options_);
       group->setForcingFloor([residual = tests.residual, cap] {
         const double r = residual->last();

@@ -75,7 +75,7 @@ class FreeRestriction final : public OP {
 /// MueLu's V-cycle from a zero guess, entered at level 1 when the finest level has no smoother:
 /// there the finest level's residual is the right-hand side itself, which MueLu's own apply
 /// computes anyway as B - A 0, a product with the widest matrix of the hierarchy (on Peridigm's
-/// tensile test 18 % of the run: docs/performance.md, session 21). Restrict, move to the
+/// tensile test 18 % of the run: docs/performance.md, "The auxiliary cycle from level 1, and the last Newton system"). Restrict, move to the
 /// repartitioned level 1 when MueLu would (an "Importer" there and P and R not rebalanced),
 /// cycle from level 1, move back, prolongate: the same arithmetic as MueLu's (B - A 0 = B and
 /// 0 + P x = P x exactly).
@@ -297,7 +297,7 @@ class TwoStageFactory final : public Thyra::PreconditionerFactoryBase<double> {
       mp.set("number of equations", aux.blockSize);
       // The finest level is smoothed by the Chebyshev steps on J; the auxiliary matrix's own
       // sweeps there cost 12-36 % of a solve for no fewer Krylov iterations on undamaged bodies,
-      // but save a third of them on damaged ones (docs/performance.md, session 17). A "level 0"
+      // but save a third of them on damaged ones (docs/performance.md, "The auxiliary hierarchy's finest level"). A "level 0"
       // list of the user's MueLu parameters is left as given.
       const std::string fine = pl.get<std::string>("Auxiliary Fine Smoothing");
       if ((fine == "Never" || (fine == "Auto" && !aux.damage)) && !mp.isSublist("level 0"))
