@@ -30,6 +30,8 @@ namespace {
 int usage(int code) {
   (code == 0 ? std::cout : std::cerr)
       << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
+         "       perinox check SCENE.xml [--set Sublist/Key=value]...  validate the scene (mesh, regions, conditions,\n"
+         "                  rigid-body modes, solver keys) and say what it holds, without solving or writing\n"
          "                  [--checkpoint-steps N] [--checkpoint-seconds S] [--checkpoint-dir DIR]\n"
          "                  [--restart CHECKPOINT_DIR]\n"
          "       perinox schema     every scene key with its default and meaning (--json: as JSON, with allowed values)\n"
@@ -212,6 +214,67 @@ nlohmann::json schemaJson(const Teuchos::ParameterList& list, const std::string&
   return out;
 }
 
+/// `perinox check SCENE [--set ...]`: reads and validates the scene as `run` does (the mesh or
+/// particle file, regions, conditions, rigid-body modes, solver keys), prints what it holds, and
+/// solves nothing and writes nothing. Exit 0, or 2 with the sentence `run` would give.
+template <class Refuse>
+int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Teuchos::Comm<int>>& comm,
+               const Refuse& refuse) {
+  if (args.size() < 2) return refuse("'perinox check' needs a scene file: perinox check SCENE.xml [--set Sublist/Key=value]...");
+  std::vector<std::string> overrides;
+  for (std::size_t i = 2; i < args.size(); ++i) {
+    if (args[i] != "--set") return refuse("unknown argument '" + args[i].substr(0, 60) + "' (perinox check takes --set Sublist/Key=value)");
+    if (i + 1 == args.size()) return refuse("--set needs a value");
+    overrides.push_back(args[++i]);
+  }
+  perinox::Scene scene;
+  try {
+    scene = perinox::loadScene(args[1], overrides, xmlDirectory() + "/solvers", comm);
+  } catch (const std::exception& e) {
+    return refuse(std::string("error: ") + e.what());
+  }
+  const perinox::ProblemSpec& P = *scene.problem;
+  const int dim = P.disc.dim;
+  // Counts over the ranks: owned particles only (a distributed share also holds ghosts).
+  auto owned = [&](long long g) { return !P.distributed || std::binary_search(P.owned.begin(), P.owned.end(), g); };
+  auto sum = [&](long long v) {
+    long long total = v;
+    Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, v, Teuchos::outArg(total));
+    return total;
+  };
+  long long fixedDofs = 0, fictitious = 0;
+  for (int i = 0; i < P.disc.size(); ++i) {
+    const long long g = P.distributed ? P.globalId[i] : i;
+    if (!owned(g)) continue;
+    for (int c = 0; c < dim; ++c) fixedDofs += (P.fixedMask[i] >> c) & 1u;
+    fictitious += P.disc.fictitious[i] != 0;
+  }
+  fixedDofs = sum(fixedDofs);
+  fictitious = sum(fictitious);
+  std::vector<std::pair<std::string, long long>> regions;
+  for (const auto& [name, ids] : scene.regions) {
+    long long n = 0;
+    for (int g : ids) n += owned(g);
+    regions.emplace_back(name, sum(n));
+  }
+  if (comm->getRank() != 0) return 0;
+  const long long particles = P.particleCount();
+  std::cout << "perinox check: " << args[1] << " is a valid scene (nothing solved, nothing written)\n"
+            << "  title: " << scene.title << "\n"
+            << "  " << dim << "D, " << particles << " particles (" << fictitious << " fictitious), horizon " << P.disc.horizon
+            << ", spacing " << P.disc.dx << "\n"
+            << "  unknowns: " << particles * dim - fixedDofs << " free, " << fixedDofs << " prescribed"
+            << "; the conditions leave no rigid-body motion free\n"
+            << "  effects: " << (P.plastic() ? "plasticity" : "elastic") << (P.damage ? ", damage" : "")
+            << (P.blocks.empty() ? "" : ", " + std::to_string(P.blocks.size()) + " blocks") << "\n"
+            << "  solver: " << scene.solver.method << ", " << scene.solver.continuation << ", linear solver "
+            << scene.solver.linearSolverName << ", Jacobian " << scene.solver.jacobian << "\n"
+            << "  regions (particles):";
+  for (const auto& [name, n] : regions) std::cout << " '" << name << "' " << n << ";";
+  std::cout << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -236,6 +299,7 @@ int main(int argc, char** argv) {
       perinox::sceneSchema()->print(std::cout, Teuchos::ParameterList::PrintOptions().showDoc(true).indent(2).showTypes(true));
     return 0;
   }
+  if (args[0] == "check") return checkScene(args, comm, refuse);
   if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; " + usageLine);
 
   // Set up: the command line, then the scene (validated completely before any work).
