@@ -237,13 +237,18 @@ perinox_bad_input(limit_load_ratio_below_one ${XML}/plastic_cylinder.xml "'Solve
 # bounds are those at 60 x 20 and at the scene's resolution, so a coarser run must be further off.
 set(PLATE_FE ${PROJECT_SOURCE_DIR}/validation/reference/plate_hole_plastic_fem.csv)
 set(PLATE_ZONE ${PROJECT_SOURCE_DIR}/validation/reference/plate_hole_plastic_fem_zone.csv)
-perinox_run_test(NAME verify_plate_hole_plastic SCENE plate_hole_plastic.xml
-  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plate_hole_plastic)
-add_test(NAME verify_plate_hole_plastic_fem COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_plate_hole_plastic.py
-  ${PERINOX_TEST_OUT}/verify_plate_hole_plastic ${PLATE_FE} --zone ${PLATE_ZONE} --spacing 1.25 --rtol 0.12 --zone-rtol 0.22)
-set_tests_properties(verify_plate_hole_plastic_fem PROPERTIES LABELS verification FIXTURES_REQUIRED plate_hole_plastic)
-perinox_run_test(NAME verify_plate_hole_plastic_coarse SCENE plate_hole_plastic.xml SETS "Discretization/Particles={60,20}"
-  CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plate_hole_plastic_coarse)
-add_test(NAME verify_plate_hole_plastic_coarse_fem COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_plate_hole_plastic.py
-  ${PERINOX_TEST_OUT}/verify_plate_hole_plastic_coarse ${PLATE_FE} --zone ${PLATE_ZONE} --spacing 2.5 --rtol 0.23 --zone-rtol 0.52)
-set_tests_properties(verify_plate_hole_plastic_coarse_fem PROPERTIES LABELS verification FIXTURES_REQUIRED plate_hole_plastic_coarse)
+# Each run: the name's suffix, the particles, the spacing, and the bounds on the reaction and the zone.
+foreach(run "|120,40|1.25|0.12|0.22" "_coarse|60,20|2.5|0.23|0.52")
+  string(REPLACE "|" ";" parts "${run}")
+  list(GET parts 0 suffix)
+  list(GET parts 1 particles)
+  list(GET parts 2 spacing)
+  list(GET parts 3 rtol)
+  list(GET parts 4 zone_rtol)
+  perinox_run_test(NAME verify_plate_hole_plastic${suffix} SCENE plate_hole_plastic.xml SETS "Discretization/Particles={${particles}}"
+    CHECK --converged --quadratic LABELS verification FIXTURE_SETUP plate_hole_plastic${suffix})
+  add_test(NAME verify_plate_hole_plastic${suffix}_fem COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_plate_hole_plastic.py
+    ${PERINOX_TEST_OUT}/verify_plate_hole_plastic${suffix} ${PLATE_FE} --zone ${PLATE_ZONE} --spacing ${spacing} --rtol ${rtol}
+    --zone-rtol ${zone_rtol})
+  set_tests_properties(verify_plate_hole_plastic${suffix}_fem PROPERTIES LABELS verification FIXTURES_REQUIRED plate_hole_plastic${suffix})
+endforeach()

@@ -139,6 +139,8 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
 }
 
 double particleFileSpacing(const std::string& path, int dim, double thickness) {
+  // readParticleFile's parse, keeping only the volumes (8 bytes a particle, not a whole
+  // discretisation: every rank of a distributed run reads the file here).
   Discretization d = emptyParticleSet(path, dim, 1.0, 1.0, thickness);  // horizon and spacing unused here
   std::ifstream in = openParticleFile(path);
   std::vector<double> volumes;

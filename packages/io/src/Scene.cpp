@@ -1700,11 +1700,12 @@ void readLoads(SceneBuild& b) {
     const double magnitude = l.get<double>("Magnitude");
     const auto centre = l.get<Array<double>>("Center");
     const auto axisGiven = l.get<Array<double>>("Axis");
-    Vec3 axis = Vec3::Zero();
+    Vec3 axis = Vec3::Zero(), centreAt = Vec3::Zero();
     if (radial) {
       if (value.norm() != 0) fail(b.file, key + "Value' is not used by a Radial Force; give its total as 'Magnitude'");
       if (!std::isfinite(magnitude) || magnitude == 0) fail(b.file, key + "Magnitude' must be finite and non-zero for a Radial Force");
       if (centre.empty()) fail(b.file, key + "Center' is needed by a Radial Force");
+      centreAt = vec3(centre);
       if (!axisGiven.empty()) {
         if (b.dim != 3) fail(b.file, key + "Axis' is for 3D scenes (in 2D the forces point away from Center in the plane)");
         axis = vec3(axisGiven);
@@ -1719,8 +1720,9 @@ void readLoads(SceneBuild& b) {
       if (b.owns(g)) mine += d.volume[b.problem.index(g)];
     totalV = mine;
     if (b.distributed()) Teuchos::reduceAll(*b.comm, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(totalV));
-    // Per unit volume: Total Force spreads over the region; a Traction's layer is one spacing thick.
-    const double scale = type == "Total Force" ? 1.0 / totalV : type == "Traction" ? 1.0 / d.dx : 1.0;
+    // Per unit volume: Total Force and Radial Force spread over the region; a Traction's layer is
+    // one spacing thick.
+    const double scale = type == "Total Force" || radial ? 1.0 / totalV : type == "Traction" ? 1.0 / d.dx : 1.0;
     for (int g : ids) {
       const int p = b.problem.index(g);
       if (d.fictitious[p]) {
@@ -1729,7 +1731,7 @@ void readLoads(SceneBuild& b) {
       }
       Vec3 v = value;
       if (radial) {
-        Vec3 r = d.X[p] - vec3(centre);
+        Vec3 r = d.X[p] - centreAt;
         if (b.dim == 2) r[2] = 0;
         if (axis.norm() > 0) r -= r.dot(axis) * axis;
         const double len = r.norm();
@@ -1738,9 +1740,9 @@ void readLoads(SceneBuild& b) {
                       position(d, p) + " lies on its centre (or axis): it has no direction");
           break;
         }
-        v = magnitude / totalV * r / len;
+        v = magnitude * r / len;
       }
-      for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += v[c] * (radial ? 1.0 : scale);
+      for (int c = 0; c < b.dim; ++c) b.problem.bodyForce[static_cast<std::size_t>(p) * b.dim + c] += v[c] * scale;
     }
   }
 }

@@ -580,17 +580,19 @@ bool LoadStepper::vetted(const StepRecord& rec, const NewtonResult& nr, const Th
 }
 
 // The step becomes the converged state; the increment grows back after easy steps.
-std::string LoadStepper::pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target) {
-  stepCompliance_ = 0;
-  if (options_.limitLoadRatio <= 0 || damage_) return "";  // damage has its own snap-back handling
-  const double dLoad = std::abs(model_->loadAt(target) - model_->loadAt(lambda));
-  if (!(dLoad > 0)) return "";
+double LoadStepper::compliance(const Thyra::VectorBase<double>& x, double from, double to) const {
+  const double dLoad = std::abs(model_->loadAt(to) - model_->loadAt(from));
+  if (!(dLoad > 0)) return 0.0;
   auto d = x.clone_v();
   Thyra::Vp_StV(d.ptr(), -1.0, *xConverged_);
-  const double c = Thyra::norm_2(*d) / dLoad;
-  stepCompliance_ = c;
+  return Thyra::norm_2(*d) / dLoad;
+}
+
+std::string LoadStepper::pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target) const {
   const double ref = state_.initialCompliance;
-  if (!(ref > 0) || c <= options_.limitLoadRatio * ref) return "";
+  if (!checksLimitLoad() || !(ref > 0)) return "";
+  const double c = compliance(x, lambda, target);
+  if (c <= options_.limitLoadRatio * ref) return "";
   std::ostringstream s;
   s << "jumps to an equilibrium whose displacement per unit load is " << std::setprecision(3) << c / ref
     << " times the first step's (above '" << options_.keyPrefix << "Limit Load Ratio' = " << options_.limitLoadRatio << ")";
@@ -598,7 +600,9 @@ std::string LoadStepper::pastLimitLoad(const Thyra::VectorBase<double>& x, doubl
 }
 
 void LoadStepper::accept(const Thyra::VectorBase<double>& x, const StepRecord& rec, const NewtonResult& nr, double previous) {
-  if (state_.initialCompliance == 0 && stepCompliance_ > 0) state_.initialCompliance = stepCompliance_;
+  // The first step that moves the load sets the limit-load check's reference (before x becomes
+  // the converged state: the compliance is measured from the one before).
+  if (checksLimitLoad() && state_.initialCompliance == 0) state_.initialCompliance = compliance(x, previous, state_.loadFactor);
   Thyra::copy(*xConverged_, xPrevious_.ptr());
   Thyra::copy(x, xConverged_.ptr());
   path_.push_back(state_.loadFactor);

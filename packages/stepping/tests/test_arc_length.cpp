@@ -166,34 +166,40 @@ TEST(ArcLengthStepper, TheFirstTangentIsTheClosedFormOne) {
 TEST(ArcLengthStepper, PassesTheLimitPointThatLoadSteppingCannot) {
   // b = 0.5: the path peaks at lambda = 1 / (e b) = 0.7358 < 1.
   const double peak = 1.0 / (std::exp(1.0) * 0.5);
-  {
+  // Load stepping to lambda = 1 in 10 steps with the given limit-load ratio: whether it got
+  // there, the load factor it stopped at, the limit load it names (NaN: none) and its failure.
+  struct Stepped {
+    bool done;
+    double loadFactor, limitLoad;
+    std::string failure;
+  };
+  auto loadStepping = [](double limitLoadRatio) {
     Rig r(0.5);
     NewtonOptions no;
     no.tolerance = 1e-12;
     auto newton = Teuchos::rcp(new NewtonSolver(r.model, r.scale, no));
     LoadStepperOptions lo;
     lo.loadSteps = 10;
-    lo.limitLoadRatio = 0;  // no limit-load check: Newton fails past the peak
+    lo.limitLoadRatio = limitLoadRatio;
     LoadStepper stepper(r.model, [newton](Thyra::VectorBase<double>& x) { return newton->solve(x); }, lo);
-    EXPECT_FALSE(stepper.run());
-    EXPECT_LT(stepper.state().loadFactor, peak);
-    EXPECT_NE(stepper.failure().find("failed after"), std::string::npos) << stepper.failure();
+    const bool done = stepper.run();
+    return Stepped{done, stepper.state().loadFactor, stepper.limitLoad(), stepper.failure()};
+  };
+  {
+    const Stepped s = loadStepping(0);  // no limit-load check: Newton fails past the peak
+    EXPECT_FALSE(s.done);
+    EXPECT_LT(s.loadFactor, peak);
+    EXPECT_NE(s.failure.find("failed after"), std::string::npos) << s.failure;
   }
   {
     // With the check (the default) the stepper says it reached a limit load: just below the peak
     // (measured 0.735547 against 0.735759), where the next step would land on the falling branch.
-    Rig r(0.5);
-    NewtonOptions no;
-    no.tolerance = 1e-12;
-    auto newton = Teuchos::rcp(new NewtonSolver(r.model, r.scale, no));
-    LoadStepperOptions lo;
-    lo.loadSteps = 10;
-    LoadStepper stepper(r.model, [newton](Thyra::VectorBase<double>& x) { return newton->solve(x); }, lo);
-    EXPECT_FALSE(stepper.run());
-    ASSERT_TRUE(std::isfinite(stepper.limitLoad())) << stepper.failure();
-    EXPECT_NE(stepper.failure().find("reached a limit load at load factor"), std::string::npos) << stepper.failure();
-    EXPECT_LT(stepper.limitLoad(), peak);
-    EXPECT_GT(stepper.limitLoad(), (1 - 1e-3) * peak);
+    const Stepped s = loadStepping(LoadStepperOptions().limitLoadRatio);
+    EXPECT_FALSE(s.done);
+    ASSERT_TRUE(std::isfinite(s.limitLoad)) << s.failure;
+    EXPECT_NE(s.failure.find("reached a limit load at load factor"), std::string::npos) << s.failure;
+    EXPECT_LT(s.limitLoad, peak);
+    EXPECT_GT(s.limitLoad, (1 - 1e-3) * peak);
   }
   Rig r(0.5);
   ArcLengthStepper arc(r.model, r.scale, pathOptions());

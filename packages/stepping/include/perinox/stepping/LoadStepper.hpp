@@ -285,10 +285,15 @@ class LoadStepper {
   Teuchos::RCP<Thyra::VectorBase<double>> xConverged_, xPrevious_;
   std::string failure_;
   double limitLoad_ = std::numeric_limits<double>::quiet_NaN();
-  double stepCompliance_ = 0.0;  // |dx| / |d load factor| of the step under way's converged solve
+  /// Whether the limit-load check is on (a ratio, and no damage policy: damage has its own
+  /// snap-back handling).
+  bool checksLimitLoad() const { return options_.limitLoadRatio > 0 && !damage_; }
+  /// |x - converged| / |load(to) - load(from)|, the pseudo-times mapped through the load path; 0
+  /// when the load does not change.
+  double compliance(const Thyra::VectorBase<double>& x, double from, double to) const;
   /// "" when the converged solve x from the converged state at pseudo-time lambda to target
-  /// stays within the limit-load ratio (and records its compliance), else why not.
-  std::string pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target);
+  /// stays within the limit-load ratio, else why not.
+  std::string pastLimitLoad(const Thyra::VectorBase<double>& x, double lambda, double target) const;
   // Work of the step under way (every solve call in it).
   long long stepWork_ = 0;
   LinearSolveCounts stepLinear_;
