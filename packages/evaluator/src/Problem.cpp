@@ -96,6 +96,7 @@ void validateShare(const ProblemSpec& P) {
 StabilizationSpec ProblemSpec::stabilizationSpec() const {
   StabilizationSpec s = stab;
   if (s.C == StabilizationSpec::kFromMaterial) s.C = micromodulusC(material, disc.horizon, disc.thickness);
+  s.horizon = disc.horizon;
   return s;
 }
 
@@ -103,6 +104,8 @@ StabilizationSpec ProblemSpec::stabilizationSpec(const BlockSpec& b) const {
   StabilizationSpec s;
   s.G = b.G ? *b.G : stab.G;
   s.C = b.C == StabilizationSpec::kFromMaterial ? micromodulusC(b.material, disc.horizon, disc.thickness) : b.C;
+  s.form = stab.form;
+  s.horizon = disc.horizon;
   return s;
 }
 

@@ -11,6 +11,7 @@
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Teuchos_XMLParameterListReader.hpp>
+#include <Teuchos_YamlParameterListCoreHelpers.hpp>
 #include <dirent.h>
 
 #include <algorithm>
@@ -28,6 +29,7 @@
 #include "SceneText.hpp"
 #include "perinox/core/ExodusMesh.hpp"
 #include "perinox/core/InputFile.hpp"
+#include "perinox/io/PeridigmDeck.hpp"
 #include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/evaluator/Problem.hpp"
@@ -430,6 +432,11 @@ void materialSchema(ParameterList& m) {
 void modelSchema(ParameterList& mo) {
   setChoice(mo, "Stabilization", "None", {{"None", ""}, {"Silling", ""}});
   setNumber(mo, "G", 0.0, "Silling stabilisation parameter (dimensionless)", nonNegative());
+  setChoice(mo, "G Form", "Silling",
+            {{"Silling", "T_z = (G C / w0_i) z"},
+             {"Peridigm Hourglass", "G (and each block's G) is Peridigm's Hourglass Coefficient: each particle's Silling G is "
+                                    "G delta S_i / (3 V_i), S_i = sum_j V_j / |xi_ij|, the same trace of stabilising stiffness "
+                                    "over its family as Peridigm's hourglass force (docs/peridigm.md)"}});
   setChoice(mo, "Zero-Energy Control", "None",
             {{"None", ""}, {"Springs", "C1"}, {"Average Displacement", "C2"}, {"Stress Points", "seed 001; nearest-neighbour families"}});
   setNumber(mo, "Stress Point Seed", 2018, "seed of the stress-point arrangements (drawn per particle from its global id)", ints(0));
@@ -1426,6 +1433,7 @@ void readStabilization(SceneBuild& b) {
   if (mo.get<std::string>("Stabilization") == "Silling") {
     b.problem.stabilization = G > 0;
     b.problem.stab.G = G;
+    if (mo.get<std::string>("G Form") == "Peridigm Hourglass") b.problem.stab.form = StabilizationSpec::Form::PeridigmHourglass;
   } else if (G > 0) {
     fail(b.file, "'Model/G' is set but 'Model/Stabilization' is None; set Stabilization to Silling");
   }
@@ -2078,24 +2086,78 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   return sc;
 }
 
-Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir,
-                const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
-  const std::string text = readSceneText(path);
+namespace {
+
+bool endsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+/// A YAML file: a Peridigm deck (Teuchos' own YAML reader; the top-level "Peridigm" map is the list).
+ParameterList readYamlDeck(const std::string& path) {
+  const std::string text = readInputText(path);
   ParameterList pl;
   try {
-    Teuchos::StringInputSource src(text);
-    const Teuchos::XMLObject root = src.getObject();
-    strictXml(root, "", path);
-    pl = Teuchos::XMLParameterListReader().toParameterList(root);
-  } catch (const SceneError&) {
-    throw;
+    pl = *Teuchos::getParametersFromYamlString(text);
   } catch (const std::exception& e) {
-    fail(path, "malformed scene XML: " + teuchosReason(e.what()));
+    fail(path, "malformed YAML: " + teuchosReason(e.what()));
+  }
+  if (pl.name() != "Peridigm" || !isPeridigmDeck(pl))
+    fail(path, "a YAML file is read as a Peridigm deck (a top-level 'Peridigm' map with its Discretization, Materials and Blocks); "
+               "perinox scenes are XML");
+  return pl;
+}
+
+/// Free displacement components over the ranks (owned particles).
+long long freeUnknowns(const ProblemSpec& P, const Teuchos::Comm<int>& comm) {
+  long long n = 0;
+  for (int i = 0; i < P.disc.size(); ++i) {
+    const long long g = P.distributed ? P.globalId[i] : i;
+    if (P.distributed && !std::binary_search(P.owned.begin(), P.owned.end(), g)) continue;
+    for (int c = 0; c < P.disc.dim; ++c) n += !((P.fixedMask[i] >> c) & 1u);
+  }
+  long long total = n;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, n, Teuchos::outArg(total));
+  return total;
+}
+
+}  // namespace
+
+Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir,
+                const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
+  ParameterList pl;
+  if (endsWith(path, ".yaml") || endsWith(path, ".yml")) {
+    pl = readYamlDeck(path);
+  } else {
+    const std::string text = readSceneText(path);
+    try {
+      Teuchos::StringInputSource src(text);
+      const Teuchos::XMLObject root = src.getObject();
+      strictXml(root, "", path);
+      pl = Teuchos::XMLParameterListReader().toParameterList(root);
+    } catch (const SceneError&) {
+      throw;
+    } catch (const std::exception& e) {
+      fail(path, "malformed scene XML: " + teuchosReason(e.what()));
+    }
+  }
+  bool kinematicOnly = false;
+  if (isPeridigmDeck(pl)) {
+    PeridigmScene made = sceneFromPeridigmDeck(pl, path);
+    pl = made.scene;
+    kinematicOnly = made.kinematicOnly;
   }
   const auto schema = sceneSchema();
   for (const auto& o : overrides) applyOverride(pl, o, *schema);
   try {
-    return buildScene(pl, path, presetDir, comm);
+    Scene sc = buildScene(pl, path, presetDir, comm);
+    if (kinematicOnly) {
+      const long long free = freeUnknowns(*sc.problem, comm.is_null() ? *Teuchos::DefaultComm<int>::getComm() : *comm);
+      if (free > 0)
+        fail(path, "'Solver/Verlet' is explicit dynamics, which perinox does not solve; a Verlet deck runs only when every "
+                   "displacement is prescribed (the motion is then kinematic), and this one leaves " + std::to_string(free) +
+                   " free (give a QuasiStatic solver list)");
+    }
+    return sc;
   } catch (const SceneError& e) {
     // A key that a --set gave: name that argument too (the latest one wins, as in applyOverride).
     const std::string msg = e.what();

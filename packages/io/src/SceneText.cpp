@@ -252,7 +252,7 @@ std::string textProblem(const std::string& t, int& line) {
   return "";
 }
 
-std::string readSceneText(const std::string& path) {
+std::string readInputText(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw SceneError(path + ": cannot open the scene file (" + std::strerror(errno) + ")");
@@ -272,6 +272,11 @@ std::string readSceneText(const std::string& path) {
   int line = 0;
   const std::string problem = textProblem(text, line);
   if (!problem.empty()) failAt(path, line, "the scene file contains " + problem + "; a scene is UTF-8 text");
+  return text;
+}
+
+std::string readSceneText(const std::string& path) {
+  std::string text = readInputText(path);
   XmlShape(text, path).check();
   // Teuchos' parser reads character references only in decimal and below 256, while XML allows
   // any code point in decimal or hexadecimal (&#x4e2d;): write those beyond ASCII as the UTF-8

@@ -21,4 +21,8 @@ std::string textProblem(const std::string& t, int& line);
 /// or not shaped like a scene.
 std::string readSceneText(const std::string& path);
 
+/// The file's bytes with the checks of readSceneText that do not depend on the format (a
+/// readable file of at most 16 MiB, not empty, UTF-8 without control bytes): for YAML.
+std::string readInputText(const std::string& path);
+
 }  // namespace perinox

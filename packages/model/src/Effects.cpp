@@ -89,8 +89,7 @@ template <int D>
 void StabilizationEffect<D>::addDirectional(BondWork<D>& w) const {
   double w0 = 0;
   for (int j = 0; j < w.m; ++j) w0 += w.Vj[j];
-  const StabilizationSpec& st = spec(w.i);
-  const double c = st.G * st.C * w.Vi / w0;
+  const double c = GC(w.i) * w.Vi / w0;
   for (int j = 0; j < w.m; ++j) {
     w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
     w.dt[j].noalias() += c * (w.dY[j] - w.dF * w.xi[j]);
@@ -109,8 +108,7 @@ void CorrespondenceEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineD
 template <int D>
 void StabilizationEffect<D>::addAffineDirectional(const BondWork<D>& w, AffineDirectional<D>& dt,
                                                   AffineDirectional<D>* t) const {
-  const StabilizationSpec& st = spec(w.i);
-  const double c = st.G * st.C * w.Vi / w.Vsum;
+  const double c = GC(w.i) * w.Vi / w.Vsum;
   dt.A.noalias() -= c * w.dF;
   dt.c += c;
   if (t) {
@@ -193,12 +191,31 @@ void CorrespondenceEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
 }
 
 template <int D>
+void StabilizationEffect<D>::prepare(const LocalParticles& p) {
+  index_ = p.material;
+  peridigmFactor_.clear();
+  bool peridigm = false;
+  for (const StabilizationSpec& s : specs_) peridigm = peridigm || s.form == StabilizationSpec::Form::PeridigmHourglass;
+  if (!peridigm) return;
+  peridigmFactor_.assign(p.numOwned, 1.0);
+  for (int i = 0; i < p.numOwned; ++i) {
+    const StabilizationSpec& s = spec(i);
+    if (s.form != StabilizationSpec::Form::PeridigmHourglass) continue;
+    double S = 0;
+    for (auto q = p.famOffset[i]; q < p.famOffset[i + 1]; ++q) {
+      const int j = p.famIndex[q];
+      S += p.volume[j] / (p.X[j] - p.X[i]).norm();
+    }
+    peridigmFactor_[i] = s.horizon * S / (3.0 * p.volume[i]);
+  }
+}
+
+template <int D>
 void StabilizationEffect<D>::addForces(BondWork<D>& w, bool tangent) const {
   double w0 = 0;
   for (int j = 0; j < w.m; ++j) w0 += w.Vj[j];
   w0 /= w.Vi;
-  const StabilizationSpec& st = spec(w.i);
-  const double c = st.G * st.C / w0;
+  const double c = GC(w.i) / w0;
   for (int j = 0; j < w.m; ++j) w.t[j].noalias() += c * (w.Y[j] - w.F * w.xi[j]);
   if (!tangent) return;
   // dT_j/du_k = c [ (delta_{k,j} - delta_{k,i}) - g_k . xi_j ] I

@@ -85,7 +85,7 @@ template <int D>
 class StabilizationEffect final : public ForceEffect<D> {
  public:
   explicit StabilizationEffect(std::vector<StabilizationSpec> s) : specs_(std::move(s)) {}
-  void prepare(const LocalParticles& p) override { index_ = p.material; }
+  void prepare(const LocalParticles& p) override;
   const char* name() const override { return "stabilization"; }
   void addForces(BondWork<D>& w, bool tangent) const override;
   void addDirectional(BondWork<D>& w) const override;
@@ -94,8 +94,14 @@ class StabilizationEffect final : public ForceEffect<D> {
 
  private:
   const StabilizationSpec& spec(int i) const { return index_.empty() ? specs_.front() : specs_[index_[i]]; }
+  /// G C of owned particle i (its Silling G: G, or G delta S_i / (3 V_i) in Peridigm's form).
+  double GC(int i) const {
+    const StabilizationSpec& s = spec(i);
+    return s.G * s.C * (peridigmFactor_.empty() ? 1.0 : peridigmFactor_[i]);
+  }
   std::vector<StabilizationSpec> specs_;
   std::vector<int> index_;
+  std::vector<double> peridigmFactor_;  // per owned particle: delta S_i / (3 V_i) (1 in Silling's form); empty if none
 };
 
 }  // namespace perinox

@@ -832,3 +832,56 @@ TEST(Model, IrregularBodyTangentAndProducts) {
     }
   }
 }
+
+// Peridigm's hourglass coefficient (StabilizationSpec::Form::PeridigmHourglass): the model must
+// be Silling's stabilisation with each particle's own G_i = c delta S_i / (3 V_i), S_i = sum_j
+// V_j / |xi_ij| (docs/peridigm.md derives the rule), here computed independently and given to a
+// model in which every particle is its own material: residual and tangent equal to round-off.
+// Its tangent against central differences (bound and step as TangentFD), symmetric; the
+// matrix-free product against it. On a cube of 6 x 5 x 4 particles with a 3-spacing horizon no
+// family is whole, so the G_i differ from particle to particle (checked).
+TEST(Model, PeridigmHourglassFormIsSillingWithEachFamilysG) {
+  const double c = 0.04;
+  Discretization d = smallLattice(3, 3.015, 6);
+  const int n = d.size();
+  MaterialSpec m = material(3);
+  const double C = micromodulusC(m, d.horizon, d.thickness);
+  auto lp = localParticles(d, 0, n);
+  Model peridigm(m, lp);
+  peridigm.enableCorrespondence();
+  StabilizationSpec form{c, C};
+  form.form = StabilizationSpec::Form::PeridigmHourglass;
+  form.horizon = d.horizon;
+  peridigm.enableStabilization(form);
+
+  std::vector<StabilizationSpec> own(n);
+  double lo = 1e300, hi = 0;
+  for (int i = 0; i < n; ++i) {
+    double S = 0;
+    for (int j = 0; j < n; ++j) {
+      const double r = (d.X[j] - d.X[i]).norm();
+      if (j != i && r <= d.horizon) S += d.volume[j] / r;
+    }
+    own[i] = {c * d.horizon * S / (3 * d.volume[i]), C};
+    lo = std::min(lo, own[i].G);
+    hi = std::max(hi, own[i].G);
+  }
+  EXPECT_GT(hi / lo, 1.5) << "the families differ";
+  auto lpOwn = lp;
+  for (int l = 0; l < lpOwn.size(); ++l) lpOwn.material.push_back(l);
+  Model silling(std::vector<MaterialSpec>(n, m), lpOwn);
+  silling.enableCorrespondence();
+  silling.enableStabilization(own);
+
+  const std::vector<double> u = stretchedRotated(d, 7);
+  DenseSink a(3, n), b(3, n);
+  peridigm.evaluate(u, a, true);
+  silling.evaluate(u, b, true);
+  EXPECT_LT((a.r - b.r).cwiseAbs().maxCoeff(), 1e-12 * b.r.cwiseAbs().maxCoeff());
+  EXPECT_LT((a.K - b.K).cwiseAbs().maxCoeff(), 1e-12 * b.K.cwiseAbs().maxCoeff());
+  const auto [err, asym] = tangentErrors(peridigm, d, u);
+  EXPECT_LT(err, 1e-6);
+  EXPECT_LT(asym, 1e-10);
+  const auto [dd, scale] = productDifference(peridigm, a.K, u, randomDisplacement(n, 3, 1.0, 5));
+  EXPECT_LT(dd, 1e-12 * scale);
+}

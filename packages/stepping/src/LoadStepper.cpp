@@ -339,7 +339,9 @@ bool LoadStepper::run() {
     // The first step has no increment to extrapolate. With prescribed motion, starting Newton from
     // the unloaded body puts the whole prescribed jump into the bonds next to the loaded
     // particles; the tangent predictor moves the body with the load first: one linear solve.
-    if (options_.predictor && options_.tangentPredictor && state_.lastIncrement == 0 && state_.step == 1)
+    // No free unknown (every displacement prescribed): nothing to predict or solve.
+    if (options_.predictor && options_.tangentPredictor && state_.lastIncrement == 0 && state_.step == 1 &&
+        xConverged_->space()->dim() > 0)
       firstTangent = firstStepTangent();
     int cut = 0;
     NewtonResult nr;

@@ -156,6 +156,12 @@ struct StabilizationSpec {
   static constexpr double kFromMaterial = -1.0;
   double G = 0.0;             // dimensionless
   double C = kFromMaterial;   // micromodulus / horizon (see micromodulusC)
+  /// How G enters. Silling: T_z = (G C / w0_i) z. PeridigmHourglass: G is Peridigm's
+  /// `Hourglass Coefficient`, and particle i takes Silling's G_i = G delta S_i / (3 V_i), S_i =
+  /// sum_j V_j / |xi_ij| over its intact bonds: the trace of the family's stabilising stiffness
+  /// then equals that of Peridigm's hourglass force (docs/peridigm.md derives it).
+  enum class Form { Silling, PeridigmHourglass } form = Form::Silling;
+  double horizon = 0.0;       // delta (PeridigmHourglass; ProblemSpec::stabilizationSpec sets it)
 };
 
 /// Supplementary-force controls of zero-energy modes (Breitenfeld et al. 2014; seed 001 eqs 7-8):

@@ -1,0 +1,49 @@
+# Peridigm's own verification decks run as Peridigm ships them (validation/peridigm_decks: deck,
+# mesh, gold file), through `perinox run deck.xml`, and compared with the gold files by
+# tests/check_peridigm_gold.py: Peridigm's hypoelastic law at the decks' stretch reproduces the
+# gold reactions to 1e-6 (measured 1e-12), and perinox's Hencky answer differs from them by the
+# difference of the two laws computed there, to 1e-6 (measured 1e-11): reactions at every step,
+# displacements particle by particle. The quasi-static deck on 1 and 2 ranks and in its YAML form;
+# the fully prescribed one (Verlet, no free unknown: its time steps are load steps). Bad decks:
+# one sentence naming the key, exit 2, nothing written. Included by tests/CMakeLists.txt.
+set(pd_decks ${PROJECT_SOURCE_DIR}/validation/peridigm_decks)
+set(pd_qs ${pd_decks}/ElasticCorrespondenceQSTension)
+set(pd_fp ${pd_decks}/ElasticCorrespondenceFullyPrescribedTension)
+set(pd_qs_check --gold ${pd_qs}/ElasticCorrespondenceQSTension_gold.e --E 200e9 --nu 0.3 --strain 0.001 --steps 2 --lateral free)
+foreach(case "qs;1;${pd_qs}/ElasticCorrespondenceQSTension.xml" "qs;2;${pd_qs}/ElasticCorrespondenceQSTension.xml"
+             "qs_yaml;1;${CMAKE_CURRENT_SOURCE_DIR}/peridigm/decks/ElasticCorrespondenceQSTension.yaml"
+             "fully_prescribed;1;${pd_fp}/ElasticCorrespondenceFullyPrescribedTension.xml"
+             "fully_prescribed;3;${pd_fp}/ElasticCorrespondenceFullyPrescribedTension.xml")
+  list(GET case 0 tag)
+  list(GET case 1 np)
+  list(GET case 2 deck)
+  set(name peridigm_deck_${tag}_np${np})
+  perinox_mpi_command(mpi ${np})
+  add_test(NAME ${name} COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/${name} --converged --
+    ${mpi} $<TARGET_FILE:perinox> run ${deck} --output ${PERINOX_TEST_OUT}/${name} --quiet)
+  set(labels verification)
+  if(np GREATER 1)
+    list(APPEND labels mpi)
+  endif()
+  set_tests_properties(${name} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT=" LABELS "${labels}"
+    PROCESSORS ${np} FIXTURES_SETUP ${name})
+  if(tag STREQUAL "fully_prescribed")
+    set(check --gold ${pd_fp}/ElasticCorrespondenceFullyPrescribedTension_gold.e --E 200e9 --nu 0 --strain 0.001 --steps 5 --lateral held)
+  else()
+    set(check ${pd_qs_check})
+  endif()
+  add_test(NAME ${name}_gold COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/check_peridigm_gold.py
+    --out ${PERINOX_TEST_OUT}/${name} ${check})
+  set_tests_properties(${name}_gold PROPERTIES LABELS "${labels}" FIXTURES_REQUIRED ${name})
+endforeach()
+
+set(pd_bad ${CMAKE_CURRENT_SOURCE_DIR}/peridigm/decks)
+perinox_bad_input(peridigm_verlet_free ${pd_bad}/verlet_free.xml "'Solver/Verlet' is explicit dynamics, which perinox does not solve")
+perinox_bad_input(peridigm_quadratic_value ${pd_bad}/quadratic_value.xml
+  "'Boundary Conditions/Bottom Y/Value': '0.001*y*y*t' is not of the form t (a + b x + c y + d z)")
+perinox_bad_input(peridigm_function_value ${pd_bad}/function_value.xml "uses the name 'sin' at character 7")
+perinox_bad_input(peridigm_ordinary_material ${pd_bad}/ordinary_material.xml "'Materials/Steel/Material Model' is 'Elastic'")
+perinox_bad_input(peridigm_constants_disagree ${pd_bad}/constants_disagree.xml "'Materials/Steel/Bulk Modulus' is 100000000000 but")
+perinox_bad_input(peridigm_plastic_no_yield ${pd_bad}/plastic_no_yield.xml "'Materials/Steel/Yield Stress' is missing")
+perinox_bad_input(peridigm_damage_models ${pd_bad}/damage_models.xml "has 'Damage Models', which perinox does not translate")
+perinox_bad_input(peridigm_not_a_deck ${pd_bad}/not_a_deck.yaml "a YAML file is read as a Peridigm deck")
