@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -23,6 +24,8 @@
 
 #include "Simulation.hpp"
 #include "perinox/io/OutputFolder.hpp"
+#include "perinox/io/PeridigmDeck.hpp"
+#include "perinox/io/Scene.hpp"
 #include "perinox/model/Model.hpp"
 
 namespace {
@@ -30,10 +33,12 @@ namespace {
 int usage(int code) {
   (code == 0 ? std::cout : std::cerr)
       << "usage: perinox run SCENE.xml [--set Sublist/Key=value]... [--output DIR] [--quiet]\n"
-         "       perinox check SCENE.xml [--set Sublist/Key=value]...  validate the scene (mesh, regions, conditions,\n"
-         "                  rigid-body modes, solver keys) and say what it holds, without solving or writing\n"
          "                  [--checkpoint-steps N] [--checkpoint-seconds S] [--checkpoint-dir DIR]\n"
          "                  [--restart CHECKPOINT_DIR]\n"
+         "       perinox check SCENE.xml [--set Sublist/Key=value]...  validate the scene (mesh, regions, conditions,\n"
+         "                  rigid-body modes, solver keys) and say what it holds, without solving or writing\n"
+         "       perinox convert DECK [--out SCENE.xml]  write the scene a Peridigm deck (XML or YAML) makes\n"
+         "                  (default: beside the deck, DECK's name with .scene.xml); run and check take decks too\n"
          "       perinox schema     every scene key with its default and meaning (--json: as JSON, with allowed values)\n"
          "       perinox --help\n"
          "checkpoints (load stepping): after a converged step, every N steps and/or S seconds, into\n"
@@ -275,6 +280,65 @@ int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Te
   return 0;
 }
 
+/// `perinox convert DECK [--out SCENE.xml]`: the scene a Peridigm deck makes, written through a
+/// temporary file beside it and renamed into place when complete (rank 0). Nothing is solved and
+/// the mesh is not read (its existence is checked). Exit 0, or 2 with one sentence.
+template <class Refuse>
+int convertDeck(const std::vector<std::string>& args, const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Refuse& refuse) {
+  namespace fs = std::filesystem;
+  if (args.size() < 2) return refuse("'perinox convert' needs a Peridigm deck: perinox convert DECK [--out SCENE.xml]");
+  const std::string deck = args[1];
+  std::string out;
+  for (std::size_t i = 2; i < args.size(); ++i) {
+    if (args[i] != "--out") return refuse("unknown argument '" + args[i].substr(0, 60) + "' (perinox convert takes --out SCENE.xml)");
+    if (i + 1 == args.size()) return refuse("--out needs a value");
+    out = args[++i];
+  }
+  if (out.empty() && args.size() > 3) return refuse("--out is empty; give the scene's path");
+  if (out.empty()) {
+    const fs::path d(deck);
+    out = (d.parent_path() / d.stem()).string() + ".scene.xml";
+  }
+  Teuchos::ParameterList scene;
+  try {
+    const Teuchos::ParameterList pl = perinox::readSceneList(deck);
+    if (!perinox::isPeridigmDeck(pl))
+      return refuse(deck + ": is a perinox scene, not a Peridigm deck (perinox convert translates Peridigm decks)");
+    const perinox::PeridigmScene made = perinox::sceneFromPeridigmDeck(pl, deck);
+    if (made.kinematicOnly)
+      return refuse(deck + " (a Peridigm deck): 'Solver/Verlet' is explicit dynamics; perinox runs such a deck only when every "
+                           "displacement is prescribed, which it checks on the mesh: use perinox run or check on the deck itself");
+    scene = made.scene;
+  } catch (const std::exception& e) {
+    return refuse(std::string("error: ") + e.what());
+  }
+  std::error_code ec;
+  if (fs::is_directory(out, ec)) return refuse("--out " + out.substr(0, 200) + " is a folder; give the scene file's path");
+  if (fs::exists(out, ec) && fs::equivalent(out, deck, ec)) return refuse("--out " + out.substr(0, 200) + " is the deck itself");
+  const fs::path parent = fs::absolute(out, ec).parent_path();
+  if (!fs::is_directory(parent, ec)) return refuse("--out " + out.substr(0, 200) + ": its folder does not exist");
+  if (comm->getRank() != 0) return 0;
+  const std::string tmp = out + ".partial";
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    f << perinox::sceneXml(scene);
+    if (!f.flush()) {
+      fs::remove(tmp, ec);
+      return refuse("cannot write the scene " + out.substr(0, 200));
+    }
+  }
+  fs::rename(tmp, out, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    return refuse("cannot write the scene " + out.substr(0, 200));
+  }
+  auto count = [&](const char* list) { return scene.isSublist(list) ? scene.sublist(list).numParams() : 0; };
+  std::cout << "perinox convert: wrote " << out << " (" << scene.get<std::string>("Title") << "): " << count("Regions") << " regions, "
+            << count("Boundary Conditions") << " conditions, " << count("Loads") << " loads, " << count("Probes") << " probes"
+            << (count("Blocks") ? ", " + std::to_string(count("Blocks")) + " blocks with their own materials" : std::string()) << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -300,6 +364,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (args[0] == "check") return checkScene(args, comm, refuse);
+  if (args[0] == "convert") return convertDeck(args, comm, refuse);
   if (args[0] != "run") return refuse("unknown command '" + args[0].substr(0, 60) + "'; " + usageLine);
 
   // Set up: the command line, then the scene (validated completely before any work).

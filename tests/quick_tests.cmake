@@ -9,6 +9,6 @@ perinox_quick_tests(
   # the driver: verification, ranks, damage, matrix-free multigrid, stress points, arc length, meshes
   verify_cantilever verify_tension_block verify_hydrostatic_scene mpi_cantilever_np2 damage_detach_np1
   scalable_mf_tension_block_np1 stresspoints_tension_block_np1 hard_shallow_arch exodus_bar_np1
-  # bad input, untrusted files, the converter
+  # bad input, untrusted files, Peridigm decks
   badinput_unknown_key badinput_malformed_xml badinput_exodus_stray_element_np2 badinput_checkpoint_inputs
-  tools_peridigm_converter)
+  peridigm_deck_qs_np1 peridigm_deck_qs_np1_gold badinput_peridigm_quadratic_value)

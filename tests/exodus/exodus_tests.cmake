@@ -29,8 +29,7 @@ perinox_link_exodus(make_exodus_meshes)
 target_include_directories(make_exodus_meshes PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/exodus)
 add_test(NAME exodus_meshes_setup COMMAND make_exodus_meshes ${EXO_DIR})
 set_tests_properties(exodus_meshes_setup PROPERTIES FIXTURES_SETUP exodus_meshes LABELS unit)
-perinox_unit_test(exodus_meshes_setup tools_peridigm_to_scene tools_peridigm_two_materials tools_peridigm_bad_deck
-                  tools_peridigm_scene_values)  # the mesh writer and the converter: no driver
+perinox_unit_test(exodus_meshes_setup peridigm_scene_values)  # the mesh writer and a scene's check: no driver
 
 # perinox_exodus_run(NAME <name> SCENE <scene in EXO_DIR> NP <n> [SETS ...]): the driver on a
 # test scene, which must converge; a fixture <name> for the comparisons.
@@ -197,38 +196,40 @@ perinox_bad_mesh_distributed(distributed_exodus_output_bad_mesh bar_exodus.xml "
 # Complete or absent: a bad mesh with Exodus output writes nothing.
 perinox_bad_mesh(exodus_output_bad_mesh bar_exodus.xml "inverted.e: element 2" --set "${MF}=inverted.e" --set "Output/Format=Exodus")
 
-# perinox_peridigm_scene(NAME DECK SCENE): tools_peridigm_NAME translates DECK into SCENE, and
-# tools_peridigm_NAME_accepted has perinox build all of it (mesh, node sets, conditions, blocks, the
-# rigid-body check), stopping before any solve at a --restart folder that does not exist.
+# perinox_peridigm_scene(NAME DECK SCENE): peridigm_convert_NAME writes the scene DECK makes
+# (perinox convert), and peridigm_convert_NAME_accepted has perinox build all of it (mesh, node
+# sets, conditions, blocks, the rigid-body check), stopping before any solve at a --restart folder
+# that does not exist.
 function(perinox_peridigm_scene name deck scene)
-  add_test(NAME tools_peridigm_${name} COMMAND ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py ${deck} --out ${scene})
-  set_tests_properties(tools_peridigm_${name} PROPERTIES LABELS unit FIXTURES_SETUP peridigm_${name})
   perinox_mpi_command(mpi1 1)
-  add_test(NAME tools_peridigm_${name}_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_${name}
+  add_test(NAME peridigm_convert_${name} COMMAND $<TARGET_FILE:perinox> convert ${deck} --out ${scene})
+  set_tests_properties(peridigm_convert_${name} PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
+    FIXTURES_SETUP peridigm_${name})
+  add_test(NAME peridigm_convert_${name}_accepted COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_${name}
     --exit-code 2 --message "no state.json there (not a checkpoint)" --no-output --
     ${mpi1} $<TARGET_FILE:perinox> run ${scene} --restart ${CMAKE_CURRENT_BINARY_DIR}/peridigm/no-such-checkpoint
     --output ${PERINOX_TEST_OUT}/peridigm_${name})
-  set_tests_properties(tools_peridigm_${name}_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
+  set_tests_properties(peridigm_convert_${name}_accepted PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS unit
     FIXTURES_REQUIRED peridigm_${name})
 endfunction()
-# tools/peridigm_to_scene.py on Peridigm's tensile deck: the scene holds the deck's numbers and
-# perinox accepts it; a deck with two materials (tests/exodus/two_material_deck.yaml: the tensile
-# test with a stiffer gauge block) becomes a scene with Blocks, accepted too; a deck it cannot
+# perinox convert on Peridigm's tensile deck: the scene holds the deck's numbers and perinox
+# accepts it; a deck with two materials (tests/exodus/two_material_deck.yaml: the tensile test
+# with a stiffer gauge block) becomes a scene with Blocks, accepted too; a deck it cannot
 # translate is refused with one sentence.
 if(EXISTS ${PERINOX_TENSILE_DIR}/tensile_test.yaml)
   set(PD_SCENE ${CMAKE_CURRENT_BINARY_DIR}/peridigm/tensile_test.xml)
+  file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/peridigm)
   perinox_peridigm_scene(to_scene ${PERINOX_TENSILE_DIR}/tensile_test.yaml ${PD_SCENE})
-  add_test(NAME tools_peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
-  set_tests_properties(tools_peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_to_scene)
+  add_test(NAME peridigm_scene_values COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/check_peridigm_scene.py ${PD_SCENE})
+  set_tests_properties(peridigm_scene_values PROPERTIES LABELS unit FIXTURES_REQUIRED peridigm_to_scene)
   perinox_peridigm_scene(two_materials ${CMAKE_CURRENT_SOURCE_DIR}/exodus/two_material_deck.yaml
     ${CMAKE_CURRENT_BINARY_DIR}/peridigm/two_material_deck.xml)
-  set_tests_properties(tools_peridigm_two_materials PROPERTIES PASS_REGULAR_EXPRESSION "3 blocks with their own materials")
+  set_tests_properties(peridigm_convert_two_materials PROPERTIES PASS_REGULAR_EXPRESSION "3 blocks with their own materials")
 endif()
-add_test(NAME tools_peridigm_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
+add_test(NAME peridigm_convert_bad_deck COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/exodus/expect_refusal.py
   "is not of the form t (a + b x + c y + d z)" --
-  ${Python3_EXECUTABLE} ${PROJECT_SOURCE_DIR}/tools/peridigm_to_scene.py ${CMAKE_CURRENT_SOURCE_DIR}/exodus/bad_deck.yaml
-  --out ${CMAKE_CURRENT_BINARY_DIR}/peridigm/bad_deck.xml)
-set_tests_properties(tools_peridigm_bad_deck PROPERTIES LABELS "unit;badinput")
+  $<TARGET_FILE:perinox> convert ${CMAKE_CURRENT_SOURCE_DIR}/exodus/bad_deck.yaml --out ${CMAKE_CURRENT_BINARY_DIR}/peridigm/bad_deck.xml)
+set_tests_properties(peridigm_convert_bad_deck PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS "unit;badinput")
 
 # Peridigm's tensile test run from its mesh and from its particle file (the same model): equal
 # probes. Opt-in (-DPERINOX_LONG_TESTS=ON, label "long"): each run solves 34 275 unknowns with a

@@ -38,6 +38,22 @@ foreach(case "qs;1;${pd_qs}/ElasticCorrespondenceQSTension.xml" "qs;2;${pd_qs}/E
 endforeach()
 
 set(pd_bad ${CMAKE_CURRENT_SOURCE_DIR}/peridigm/decks)
+# A body force (Peridigm's Body Force condition, a force per volume): -1e9 t N/m^3 in y on the top
+# grip's 96 particles of 0.015625 m^3, the bottom grip held: the bottom block reacts +1.5e9 N at
+# t = 1 (equilibrium; to Newton's tolerance, 1e-10 of the reaction).
+perinox_mpi_command(mpi1 1)
+add_test(NAME peridigm_deck_body_force COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_deck_body_force
+  --converged --probe Bottom_Reaction_Force 1 1.5e9 1e-9 --
+  ${mpi1} $<TARGET_FILE:perinox> run ${pd_bad}/body_force.xml --output ${PERINOX_TEST_OUT}/peridigm_deck_body_force --quiet)
+# Elastic Plastic Correspondence (yield stress 200 MPa, hardening modulus 2 GPa, E = 200 GPa):
+# the bar pulled to 1 % strain in uniaxial stress. Closed form of J2 at finite strain with the
+# exponential map: eps_p = (E ln 1.01 - sigma_y) / (E + H) = 8.8617e-3, tau = sigma_y + H eps_p,
+# reaction P A = tau / 1.01 x 1 m^2 = 2.15567749933e8 N (measured to 4e-13); quadratic Newton.
+add_test(NAME peridigm_deck_plastic COMMAND ${Python3_EXECUTABLE} ${PERINOX_CHECK} --out ${PERINOX_TEST_OUT}/peridigm_deck_plastic
+  --converged --quadratic --probe Top_Reaction_Force 1 2.1556774993268913e8 1e-8 --
+  ${mpi1} $<TARGET_FILE:perinox> run ${pd_bad}/plastic_bar.xml --output ${PERINOX_TEST_OUT}/peridigm_deck_plastic --quiet)
+set_tests_properties(peridigm_deck_body_force peridigm_deck_plastic PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV};PERINOX_PLOT_SCRIPT="
+  LABELS verification)
 perinox_bad_input(peridigm_verlet_free ${pd_bad}/verlet_free.xml "'Solver/Verlet' is explicit dynamics, which perinox does not solve")
 perinox_bad_input(peridigm_quadratic_value ${pd_bad}/quadratic_value.xml
   "'Boundary Conditions/Bottom Y/Value': '0.001*y*y*t' is not of the form t (a + b x + c y + d z)")
@@ -46,4 +62,8 @@ perinox_bad_input(peridigm_ordinary_material ${pd_bad}/ordinary_material.xml "'M
 perinox_bad_input(peridigm_constants_disagree ${pd_bad}/constants_disagree.xml "'Materials/Steel/Bulk Modulus' is 100000000000 but")
 perinox_bad_input(peridigm_plastic_no_yield ${pd_bad}/plastic_no_yield.xml "'Materials/Steel/Yield Stress' is missing")
 perinox_bad_input(peridigm_damage_models ${pd_bad}/damage_models.xml "has 'Damage Models', which perinox does not translate")
-perinox_bad_input(peridigm_not_a_deck ${pd_bad}/not_a_deck.yaml "a YAML file is read as a Peridigm deck")
+perinox_bad_input(peridigm_not_a_deck ${pd_bad}/not_a_deck.yaml "not the map 'Peridigm:' a Peridigm deck holds")
+# The scene a deck made (the run folder's scene.resolved.xml) is a scene perinox reads as it is.
+add_test(NAME peridigm_deck_resolved_scene COMMAND $<TARGET_FILE:perinox> check ${PERINOX_TEST_OUT}/peridigm_deck_qs_np1/scene.resolved.xml)
+set_tests_properties(peridigm_deck_resolved_scene PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS verification
+  FIXTURES_REQUIRED peridigm_deck_qs_np1 PASS_REGULAR_EXPRESSION "is a valid scene")

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -432,7 +433,8 @@ void setMaterial(ParameterList& ml, const DeckMaterial& m) {
 std::string absolutePath(const std::string& deckPath, const std::string& rel) {
   namespace fs = std::filesystem;
   fs::path p(rel);
-  if (p.is_relative()) p = fs::absolute(fs::path(deckPath)).parent_path() / p;
+  std::error_code ec;
+  if (p.is_relative()) p = fs::absolute(fs::path(deckPath), ec).parent_path() / p;
   return p.lexically_normal().string();
 }
 
@@ -462,6 +464,10 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   if (dtype != "Exodus")
     deck.refuse(disc.key("Type") + " is " + quote(dtype) + "; perinox translates Exodus meshes (Type Exodus)");
   const std::string mesh = absolutePath(deckPath, disc.text("Input Mesh File"));
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(mesh, ec))
+    deck.refuse(disc.key("Input Mesh File") + " is " + quote(disc.text("Input Mesh File"), 80) + ", which " +
+                (std::filesystem::exists(mesh, ec) ? "is not a file" : "does not exist") + " (looked for " + quote(mesh, 200) + ")");
   for (const std::string& k : disc.names())
     if (k != "Type" && k != "Input Mesh File" && k != "Omit Bonds Between Blocks" && k != "Verbose")
       deck.refuse(disc.key(k) + " is not translated (perinox reads Type and Input Mesh File)");
@@ -490,7 +496,8 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     const double h = b.number("Horizon", "a finite number above 0", [](double v) { return v > 0; });
     if (horizon < 0) horizon = h, horizonFrom = b.key("Horizon");
     else if (h != horizon)
-      deck.refuse(b.key("Horizon") + " is " + shortest(h) + " but " + horizonFrom + " is " + shortest(horizon) + "; perinox uses one horizon");
+      deck.refuse(b.key("Horizon") + " is " + shortest(h) + " but " + horizonFrom + " is " + shortest(horizon) +
+                  "; perinox uses one horizon for all blocks, and these blocks' horizons differ");
     std::istringstream names(b.text("Block Names"));
     for (std::string n; names >> n;) {
       const long long id = blockId(n);
@@ -549,27 +556,40 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     for (const std::string& name : bcs.names()) {
       const Teuchos::ParameterEntry& e = bcs.entry(name);
       if (!e.isList()) {
-        if (name.find("Node Set") != std::string::npos)
-          deck.refuse(bcs.key(name) + " defines a node set in the deck; perinox takes node sets from the Exodus mesh by name (nodelist_<id>)");
+        std::string tidy = name;
+        for (char& ch : tidy) ch = ch == ' ' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+        if (tidy.find("NODE_SET") != std::string::npos)
+          deck.refuse(bcs.key(name) + " defines a node set in the deck (a node-set file or node numbers); perinox takes node sets "
+                      "from the Exodus mesh by name (nodelist_<id>)");
         deck.refuse(bcs.key(name) + " is " + described(e) + ", not a list (a boundary condition)");
       }
       const Section bc = bcs.sub(name);
       const std::string type = bc.text("Type");
-      if (type != "Prescribed Displacement")
-        deck.refuse(bc.key("Type") + " is " + quote(type) + "; perinox translates Prescribed Displacement");
+      if (type != "Prescribed Displacement" && type != "Body Force")
+        deck.refuse(bc.key("Type") + " is " + quote(type) + "; perinox translates Prescribed Displacement and Body Force");
       const std::string ns = bc.text("Node Set");
       const std::string comp = bc.text("Coordinate");
       if (comp != "x" && comp != "y" && comp != "z") deck.refuse(bc.key("Coordinate") + " is " + quote(comp) + "; it must be x, y or z");
       std::array<double, 4> c = linearInT(deck, bc.key("Value"), bc.entry("Value"));
       for (double& v : c) v *= finalTime;  // t = load factor x Final Time
-      const auto [it, fresh] = prescribed.emplace(std::make_pair(ns, comp), c);
-      if (!fresh && it->second != c)
-        deck.refuse("boundary condition " + quote(name) + " prescribes " + comp + " on " + quote(ns) + " differently from another condition");
       if (!regions.isSublist(ns)) {
         ParameterList& r = regions.sublist(ns);
         r.set("Type", std::string("Node Set"));
         r.set("Name", ns);
       }
+      const int axis = comp[0] - 'x';
+      if (type == "Body Force") {  // a force per volume on the node set's particles
+        if (c[1] != 0 || c[2] != 0 || c[3] != 0)
+          deck.refuse(bc.key("Value") + " varies with x, y or z; perinox's body forces are uniform over their region (t times a number)");
+        ParameterList& ld = sc.sublist("Loads").sublist(name);
+        ld.set("Region", ns);
+        ld.set("Type", std::string("Body Force"));
+        ld.set("Value", array3(axis == 0 ? c[0] : 0.0, axis == 1 ? c[0] : 0.0, axis == 2 ? c[0] : 0.0));
+        continue;
+      }
+      const auto [it, fresh] = prescribed.emplace(std::make_pair(ns, comp), c);
+      if (!fresh && it->second != c)
+        deck.refuse("boundary condition " + quote(name) + " prescribes " + comp + " on " + quote(ns) + " differently from another condition");
       ParameterList& cl = conditions.sublist(name);
       cl.set("Region", ns);
       cl.set("Component", comp);
@@ -658,7 +678,8 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   std::ostringstream what;
   what << "Translated from the Peridigm deck " << deckPath << ". ";
   for (const auto& [name, m] : materials)
-    what << "Material " << quote(name, 60) << ": E = " << shortest(m.E) << ", nu = " << shortest(m.nu) << " (from " << m.from
+    what << "material " << quote(name, 60) << ": K = " << shortest(m.K) << ", G = " << shortest(m.G) << ", E = " << shortest(m.E)
+         << ", nu = " << shortest(m.nu) << " (from " << m.from
          << "), Hencky (Peridigm's correspondence material is a hypoelastic rate form: the two agree to the order of the strain), "
          << (m.hourglass > 0 ? "hourglass coefficient " + shortest(m.hourglass) +
                                    " (Model/G Form = Peridigm Hourglass: each particle's Silling G gives the family Peridigm's stabilising stiffness)"

@@ -11,6 +11,7 @@
 #include <Teuchos_XMLObject.hpp>
 #include <Teuchos_XMLParameterListHelpers.hpp>
 #include <Teuchos_XMLParameterListReader.hpp>
+#include <Teuchos_XMLParameterListWriter.hpp>
 #include <Teuchos_YamlParameterListCoreHelpers.hpp>
 #include <dirent.h>
 
@@ -20,6 +21,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -752,6 +754,9 @@ void checkGivenValues(const ParameterList& user, int dim, const std::string& fil
     }
     const auto rule = lengthTable().find(pattern);
     if (rule == lengthTable().end()) return;
+    // The schema's own default, as a resolved scene (every default filled in) writes it, is not a
+    // value given for this dimension.
+    if (schemaEntry && schemaEntry->getAny(false) == e.getAny(false)) return;
     const int n = e.isType<Array<double>>() ? Teuchos::getValue<Array<double>>(e).size() : Teuchos::getValue<Array<int>>(e).size();
     const int want = rule->second == Length::Three ? 3 : rule->second == Length::DimSquaredOrEmpty ? dim * dim : dim;
     const bool emptyOk = rule->second == Length::DimOrEmpty || rule->second == Length::DimSquaredOrEmpty;
@@ -2080,7 +2085,18 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   sc.problem = problem;
   const SolverSettings& s = sc.solver;
   sc.resolved = Teuchos::rcp(new ParameterList(pl));
-  if (s.linearSolverName != "custom") sc.resolved->sublist("Solver").sublist("Linear Solver").setParameters(*s.linearSolver);
+  // The file read, by its absolute path, and the preset's list written out as a custom one: the
+  // resolved scene runs as it is, from any folder.
+  if (!sc.inputFile.empty()) {
+    ParameterList& d = sc.resolved->sublist("Discretization");
+    std::error_code ec;
+    const std::string at = std::filesystem::absolute(sc.inputFile, ec).lexically_normal().string();
+    if (!ec) d.set(d.get<std::string>("Type") == "Exodus" ? "Mesh File" : "Particle File", at);
+  }
+  if (s.linearSolverName != "custom") {
+    sc.resolved->sublist("Solver").sublist("Linear Solver").setParameters(*s.linearSolver);
+    sc.resolved->sublist("Solver").set("Linear Solver Preset", std::string("custom"));
+  }
   sc.resolved->sublist("Solver").set("Jacobian", s.jacobian);
   sc.resolved->sublist("Solver").set("Preconditioner Matrix", s.preconditionerMatrix);
   return sc;
@@ -2092,14 +2108,65 @@ bool endsWith(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-/// A YAML file: a Peridigm deck (Teuchos' own YAML reader; the top-level "Peridigm" map is the list).
+/// A YAML file: a Peridigm deck (Teuchos' own YAML reader; the top-level "Peridigm" map is the
+/// list). Before Teuchos parses it, the text must be a deck's size and shape: at most 1 MiB,
+/// flow brackets nested at most 32 deep and lines indented at most 256 columns (Teuchos' reader
+/// takes seconds on a few thousand nested maps), no backslash escapes in double-quoted texts
+/// (Teuchos drops the backslash: "\t" would read as "t"), and its first line of content "Peridigm:".
 ParameterList readYamlDeck(const std::string& path) {
+  constexpr std::size_t kMaxYaml = std::size_t(1) << 20;
   const std::string text = readInputText(path);
+  if (text.size() > kMaxYaml)
+    fail(path, "a YAML deck of " + std::to_string(text.size()) + " bytes; Peridigm decks are a few kilobytes, and perinox reads at most 1 MiB");
+  std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '<')
+    fail(path, "holds XML: a Teuchos XML deck or scene is read from a file named .xml");
+  int depth = 0, deepest = 0, line = 1;
+  std::size_t indent = 0, widest = 0;
+  bool atStart = true, comment = false;
+  char quoted = 0;
+  std::string firstContent;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line, atStart = true, comment = false, indent = 0;
+      continue;
+    }
+    if (comment) continue;
+    if (atStart && c == ' ') {
+      widest = std::max(widest, ++indent);
+      continue;
+    }
+    if (atStart && c != '\r' && c != '\t' && c != '#' && firstContent.empty())
+      firstContent = text.substr(i, text.find('\n', i) - i);
+    atStart = atStart && (c == '\r' || c == '\t');
+    if (quoted) {
+      if (c == '\\' && quoted == '"')
+        fail(path, "has a backslash escape in a double-quoted text at line " + std::to_string(line) +
+                   ", which Teuchos' YAML reader does not interpret (it would change the text)");
+      if (c == quoted) quoted = 0;
+    } else if (c == '#') {
+      comment = true;
+    } else if (c == '"' || c == '\'') {
+      quoted = c;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+    if (deepest > 32) fail(path, "nests brackets more than 32 deep (line " + std::to_string(line) + "); a Peridigm deck nests a few levels");
+  }
+  if (widest > 256) fail(path, "indents a line by more than 256 columns; a Peridigm deck nests a few levels");
+  if (firstContent.empty()) fail(path, "holds no YAML content (the file is empty or only comments)");
+  if (firstContent.rfind("Peridigm:", 0) != 0)
+    fail(path, "its top level is " + quote(firstContent, 40) + ", not the map 'Peridigm:' a Peridigm deck holds (perinox scenes are XML)");
   ParameterList pl;
   try {
     pl = *Teuchos::getParametersFromYamlString(text);
   } catch (const std::exception& e) {
-    fail(path, "malformed YAML: " + teuchosReason(e.what()));
+    std::string why = teuchosReason(e.what());
+    if (why.find_first_not_of(" Error!") == std::string::npos) why = "Teuchos' YAML reader cannot read it as a map of lists and values";
+    fail(path, "malformed YAML: " + why);
   }
   if (pl.name() != "Peridigm" || !isPeridigmDeck(pl))
     fail(path, "a YAML file is read as a Peridigm deck (a top-level 'Peridigm' map with its Discretization, Materials and Blocks); "
@@ -2122,24 +2189,24 @@ long long freeUnknowns(const ProblemSpec& P, const Teuchos::Comm<int>& comm) {
 
 }  // namespace
 
+ParameterList readSceneList(const std::string& path) {
+  if (endsWith(path, ".yaml") || endsWith(path, ".yml")) return readYamlDeck(path);
+  const std::string text = readSceneText(path);
+  try {
+    Teuchos::StringInputSource src(text);
+    const Teuchos::XMLObject root = src.getObject();
+    strictXml(root, "", path);
+    return Teuchos::XMLParameterListReader().toParameterList(root);
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(path, "malformed scene XML: " + teuchosReason(e.what()));
+  }
+}
+
 Scene loadScene(const std::string& path, const std::vector<std::string>& overrides, const std::string& presetDir,
                 const Teuchos::RCP<const Teuchos::Comm<int>>& comm) {
-  ParameterList pl;
-  if (endsWith(path, ".yaml") || endsWith(path, ".yml")) {
-    pl = readYamlDeck(path);
-  } else {
-    const std::string text = readSceneText(path);
-    try {
-      Teuchos::StringInputSource src(text);
-      const Teuchos::XMLObject root = src.getObject();
-      strictXml(root, "", path);
-      pl = Teuchos::XMLParameterListReader().toParameterList(root);
-    } catch (const SceneError&) {
-      throw;
-    } catch (const std::exception& e) {
-      fail(path, "malformed scene XML: " + teuchosReason(e.what()));
-    }
-  }
+  ParameterList pl = readSceneList(path);
   bool kinematicOnly = false;
   if (isPeridigmDeck(pl)) {
     PeridigmScene made = sceneFromPeridigmDeck(pl, path);
@@ -2171,5 +2238,28 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
 }
 
 const Teuchos::ParameterEntry* sceneSchemaEntry(const std::string& key) { return patternEntry(key); }
+
+namespace {
+
+/// obj with only what a scene file holds: <ParameterList> and <Parameter> elements, and their
+/// name, type and value (Teuchos' writer adds ids, documentation and <Validators>).
+Teuchos::XMLObject sceneElements(const Teuchos::XMLObject& obj) {
+  Teuchos::XMLObject out(obj.getTag());
+  for (const char* a : {"name", "type", "value"})
+    if (obj.hasAttribute(a)) out.addAttribute(a, obj.getAttribute(a));
+  for (int i = 0; i < obj.numChildren(); ++i) {
+    const Teuchos::XMLObject& c = obj.getChild(i);
+    if (c.getTag() == "ParameterList" || c.getTag() == "Parameter") out.addChild(sceneElements(c));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string sceneXml(const ParameterList& scene) {
+  ParameterList named(scene);
+  named.setName("perinox");
+  return sceneElements(Teuchos::XMLParameterListWriter().toXML(named)).toString();
+}
 
 }  // namespace perinox

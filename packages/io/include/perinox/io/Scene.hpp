@@ -128,6 +128,15 @@ Scene buildScene(Teuchos::ParameterList pl, const std::string& file, const std::
 
 /// The schema with defaults and documentation, for --help and docs.
 Teuchos::RCP<const Teuchos::ParameterList> sceneSchema();
+
+/// The list a scene file holds, parsed and checked as text, before any key is looked at: XML
+/// (strictly typed, no duplicate keys), or a YAML file (read as a Peridigm deck only). Throws
+/// SceneError naming the file.
+Teuchos::ParameterList readSceneList(const std::string& path);
+
+/// A scene list as the text of a scene file (ParameterList and Parameter elements with their
+/// name, type and value only), which readSceneList and loadScene read back.
+std::string sceneXml(const Teuchos::ParameterList& scene);
 /// The schema's entry (default and documentation) for a resolved scene's key "Sublist/Key"
 /// ("Regions/left/Side": a named sublist's entries are its template's), or null if it has none.
 const Teuchos::ParameterEntry* sceneSchemaEntry(const std::string& key);
