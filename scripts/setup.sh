@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(cmake make g++ trilinos-all-dev libptscotch-dev libeigen3-dev libopenmpi-dev openmpi-bin libmumps-dev libopenblas0-serial
           libexodusii-dev
-          libgtest-dev nlohmann-json3-dev python3 python3-matplotlib)
+          libgtest-dev nlohmann-json3-dev python3 python3-matplotlib python3-yaml)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
