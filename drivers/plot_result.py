@@ -5,7 +5,8 @@
 
 Writes OUTDIR/deformed.png (real particles on the deformed configuration, coloured by
 sigma_xx and by |u|, and by the damage index and the equivalent plastic strain where the run has
-them) and OUTDIR/probes.png (probe values against the load factor).
+them) and OUTDIR/probes.png (probe values against the load factor: displacements on the left
+axis, reactions on the right, each labelled with its quantity and the scene's unit of it).
 """
 import csv
 import json
@@ -73,17 +74,40 @@ def main(out):
 
     probes = summary.get("probes", {})
     if probes:
-        fig, ax = plt.subplots(figsize=(6, 4))
+        # Displacements (scene length unit) on the left axis, reactions (scene force unit) on a
+        # right one, plastic strains (no unit) on the left when there is nothing else: each curve
+        # against the axis of its quantity, never a force and a length on one scale.
+        units = {"displacement": "displacement (scene length unit)", "reaction": "reaction (scene force unit)",
+                 "plastic_strain": "equivalent plastic strain (-)"}
+        kinds = []
+        for hist in probes.values():
+            key = next((k for k in hist[0] if k != "load_factor"), "displacement") if hist else "displacement"
+            if key not in kinds:
+                kinds.append(key)
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        axis_of = {kinds[0]: ax}
+        if len(kinds) > 1:
+            axis_of[kinds[1]] = ax.twinx()
+        for k in kinds[2:]:
+            axis_of[k] = ax  # a third kind shares the left axis; its unit is in the legend
+        styles = ["-", "--", ":"]
+        lines = []
         for name, hist in probes.items():
             key = next((k for k in hist[0] if k != "load_factor"), "displacement") if hist else "displacement"
             lf = [h["load_factor"] for h in hist]
             ncomp = len(hist[0][key]) if hist else 0
+            target = axis_of[key]
             for c in range(ncomp):
                 comp = ("max", "mean")[c] if key == "plastic_strain" else "xyz"[c]
-                ax.plot(lf, [h[key][c] for h in hist], marker="o", label=f"{name} {key}[{comp}]")
+                lines += target.plot(lf, [h[key][c] for h in hist], marker="o", linestyle=styles[kinds.index(key) % 3],
+                                     label=f"{name} {key}[{comp}]")
+        for key, a in axis_of.items():
+            if a is not ax or key == kinds[0]:
+                a.set_ylabel(units.get(key, key) if a is not ax or len(kinds) < 3 else " / ".join(units.get(k, k) for k in kinds if axis_of[k] is ax))
         ax.set_xlabel("load factor")
         ax.grid(True)
-        ax.legend(fontsize=8)
+        ax.legend(lines, [l.get_label() for l in lines], fontsize=8)
+        ax.set_title(summary.get("title", ""), fontsize=10)
         fig.tight_layout()
         fig.savefig(os.path.join(out, "probes.png"), dpi=110)
         plt.close(fig)
