@@ -492,7 +492,7 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   agreed(*comm, [&] {
     if (rank != 0) return;
     openStaging(folders.output);
-    writeFileAtomic(staging + "/scene.resolved.xml", sceneXml(*scene.resolved));
+    writeFileAtomic(staging + "/scene.resolved.xml", resolvedSceneText(scene));
   });
   // Output/Format = Exodus or Both: fields.e in the staging folder, a time step per converged step.
   std::unique_ptr<ExodusRecorder> exodus;

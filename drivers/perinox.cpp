@@ -241,25 +241,19 @@ int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Te
   const perinox::ProblemSpec& P = *scene.problem;
   const int dim = P.disc.dim;
   // Counts over the ranks: owned particles only (a distributed share also holds ghosts).
-  auto owned = [&](long long g) { return !P.distributed || std::binary_search(P.owned.begin(), P.owned.end(), g); };
   auto sum = [&](long long v) {
     long long total = v;
     Teuchos::reduceAll(*comm, Teuchos::REDUCE_SUM, v, Teuchos::outArg(total));
     return total;
   };
-  long long fixedDofs = 0, fictitious = 0;
-  for (int i = 0; i < P.disc.size(); ++i) {
-    const long long g = P.distributed ? P.globalId[i] : i;
-    if (!owned(g)) continue;
-    for (int c = 0; c < dim; ++c) fixedDofs += (P.fixedMask[i] >> c) & 1u;
-    fictitious += P.disc.fictitious[i] != 0;
-  }
-  fixedDofs = sum(fixedDofs);
+  const long long fixedDofs = perinox::prescribedDofCount(*comm, P);
+  long long fictitious = 0;
+  for (int i = 0; i < P.disc.size(); ++i) fictitious += P.owns(P.distributed ? P.globalId[i] : i) && P.disc.fictitious[i] != 0;
   fictitious = sum(fictitious);
   std::vector<std::pair<std::string, long long>> regions;
   for (const auto& [name, ids] : scene.regions) {
     long long n = 0;
-    for (int g : ids) n += owned(g);
+    for (int g : ids) n += P.owns(g);
     regions.emplace_back(name, sum(n));
   }
   if (comm->getRank() != 0) return 0;
@@ -315,6 +309,15 @@ int convertDeck(const std::vector<std::string>& args, const Teuchos::RCP<const T
   std::error_code ec;
   if (fs::is_directory(out, ec)) return refuse("--out " + out.substr(0, 200) + " is a folder; give the scene file's path");
   if (fs::exists(out, ec) && fs::equivalent(out, deck, ec)) return refuse("--out " + out.substr(0, 200) + " is the deck itself");
+  // An existing file is replaced only if it is a scene perinox convert wrote (a user's file never).
+  if (fs::exists(out, ec)) {
+    std::ifstream old(out, std::ios::binary);
+    std::string head(std::size_t(16) << 20, '\0');  // a scene's size limit
+    old.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(old.gcount()));
+    if (head.rfind("<ParameterList name=\"perinox\">", 0) != 0 || head.find("value=\"Translated from the Peridigm deck ") == std::string::npos)
+      return refuse("--out " + out.substr(0, 200) + " exists and is not a scene perinox convert wrote; name a new file or move it");
+  }
   const fs::path parent = fs::absolute(out, ec).parent_path();
   if (!fs::is_directory(parent, ec)) return refuse("--out " + out.substr(0, 200) + ": its folder does not exist");
   if (comm->getRank() != 0) return 0;

@@ -16,7 +16,9 @@ expected words and no C++ or JSON library internals, and no output folder:
   * a load factor of 1 at step 2 of 3: "is not the load factor";
   * detached particles, a broken bond, a frozen value in this undamaged run: "has no damage".
 
-And the untouched checkpoint must resume (exit 0), so the refusals are not of every checkpoint.
+And the untouched checkpoint must resume (exit 0), so the refusals are not of every checkpoint;
+so must the scene and its mesh copied into another folder (the checkpoint is tied to the mesh by
+its content, not by where it lies).
 Prints `N passed, M failed`; exit 1 if any check failed.
 """
 import argparse
@@ -47,8 +49,8 @@ shutil.copy(os.path.join(a.meshes, "bar.e"), mesh)
 launcher = shlex.split(a.mpi)
 
 
-def run(*args):
-    r = subprocess.run(launcher + [a.perinox, "run", scene, "--set", "Solver/Load Steps=3"] + list(args),
+def run(*args, scene_file=None):
+    r = subprocess.run(launcher + [a.perinox, "run", scene_file or scene, "--set", "Solver/Load Steps=3"] + list(args),
                        capture_output=True, text=True, timeout=300)
     return r.returncode, own_lines(r.stderr)
 
@@ -61,15 +63,16 @@ good = os.path.join(a.work, "first.checkpoint")
 passed = failed = 0
 
 
-def expect(name, words, edit):
-    """Copies the checkpoint, applies edit(folder), resumes: exit 2 with `words`, nothing written."""
+def expect(name, words, edit, scene_file=None):
+    """Copies the checkpoint, applies edit(folder), resumes (the scene scene_file, default the
+    first run's): exit 2 with `words`, nothing written; or, when words is empty, exit 0."""
     global passed, failed
     ck = os.path.join(a.work, name + ".checkpoint")
     shutil.rmtree(ck, ignore_errors=True)
     shutil.copytree(good, ck)
     edit(ck)
     out = os.path.join(a.work, name)
-    code, err = run("--output", out, "--restart", ck)
+    code, err = run("--output", out, "--restart", ck, scene_file=scene_file)
     internals = [w for w in ("json.exception", "std::", "ProblemSpec::", "basic_string", "what():") if err and w in err[0]]
     ok = (code == 2 and len(err) == 1 and words in err[0] and not internals and not os.path.exists(out)) if words else code == 0
     if ok:
@@ -115,6 +118,11 @@ expect("lambda_one", "is not the load factor", state_edit(**{"lambda": 1.0}))
 expect("detached_undamaged", "has no damage", state_edit(detached=[3]))
 expect("bond_undamaged", "has no damage", rank_line("bond 1 2"))
 expect("frozen_undamaged", "has no damage", rank_line("frozen 4 0x0p+0"))
+moved = os.path.join(a.work, "elsewhere")
+os.makedirs(moved)
+shutil.copy(scene, moved)
+shutil.copy(mesh, moved)
+expect("moved", "", lambda ck: None, scene_file=os.path.join(moved, "bar.xml"))
 # Last: the mesh itself replaced, the checkpoint untouched.
 shutil.copy(os.path.join(a.meshes, "bar_scaled.e"), mesh)
 expect("mesh_replaced", "is not the file it was written with", lambda ck: None)

@@ -438,12 +438,35 @@ def malformed_cases(tool, work, marker):
                 bad.append("the deck was changed")
         return bad, r
 
+    def users_file():  # an existing file that is not a scene convert wrote: never replaced
+        folder = os.path.join(work, "b_users_file")
+        os.makedirs(folder, exist_ok=True)
+        with open(os.path.join(folder, "scene.xml"), "w") as f:
+            f.write("my notes\n")
+        r = Run(tool, folder, dump(BASE))
+        bad = r.refused("exists and is not a scene perinox convert wrote")
+        with open(r.out) as f:
+            if f.read() != "my notes\n":
+                bad.append("the user's file was changed")
+        return bad, r
+
+    def own_scene_again():  # the scene convert wrote before is replaced by a new conversion
+        folder = os.path.join(work, "b_again")
+        first = Run(tool, folder, dump(BASE))
+        bad = first.converted()
+        r = Run(tool, folder, dump(deck_with((("Blocks", "All", "Horizon"), 0.2))))
+        bad += r.converted()
+        if not bad and float(Scene(r.out).value(Scene(r.out).sub(Scene(r.out).root, "Discretization"), "Horizon")) != 0.2:
+            bad.append("the scene was not replaced")
+        return bad, r
+
     def bad_option():
         r = Run(tool, os.path.join(work, "b_option"), dump(BASE), extra=["--no-such-option"])
         return r.refused("--no-such-option"), r
 
     cases += [("(b) refuses a folder as the deck", folder_as_deck), ("(b) refuses a missing deck", missing_deck),
-              ("(b) refuses to overwrite the deck", deck_named_like_its_scene), ("(b) refuses an unknown option", bad_option)]
+              ("(b) refuses to overwrite the deck", deck_named_like_its_scene), ("(b) refuses an unknown option", bad_option),
+              ("(b) refuses to replace a user's file", users_file), ("(b) replaces the scene it wrote", own_scene_again)]
     return cases
 
 

@@ -70,6 +70,16 @@ bool preventsRigidMotion(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
   return gramHasFullRank(all);
 }
 
+long long prescribedDofCount(const Teuchos::Comm<int>& comm, const ProblemSpec& P) {
+  long long mine = 0;
+  for (int i = 0; i < P.disc.size(); ++i)
+    if (P.owns(P.distributed ? P.globalId[i] : i))
+      for (int c = 0; c < P.disc.dim; ++c) mine += (P.fixedMask[i] >> c) & 1u;
+  long long all = mine;
+  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, mine, Teuchos::outArg(all));
+  return all;
+}
+
 PeridynamicEvaluator::PeridynamicEvaluator(Teuchos::RCP<const Teuchos::Comm<int>> comm,
                                            std::shared_ptr<const ProblemSpec> problem)
     : comm_(comm), problem_(std::move(problem)) {

@@ -216,6 +216,10 @@ bool ProblemSpec::holds(long long g) const {
   return distributed ? std::binary_search(globalId.begin(), globalId.end(), g) : g >= 0 && g < disc.size();
 }
 
+bool ProblemSpec::owns(long long g) const {
+  return !distributed || std::binary_search(owned.begin(), owned.end(), g);
+}
+
 int ProblemSpec::index(long long g) const {
   if (!distributed) return static_cast<int>(g);
   if (!holds(g)) throw std::out_of_range("ProblemSpec: particle " + std::to_string(g) + " is not in this rank's share");

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "SceneText.hpp"
+#include "perinox/core/InputFile.hpp"
 #include "perinox/io/Scene.hpp"
 
 namespace perinox {
@@ -26,7 +28,8 @@ constexpr int kMaxDepth = 50;                 // levels of parentheses and signs
 constexpr int kMaxLoadSteps = 1000000;        // Solver/Load Steps' bound
 constexpr double kAgreement = 1e-6;           // three or four elastic constants must agree to this
 
-std::string shortest(double v) {
+/// v with 17 significant digits: read back, the same double.
+std::string roundTrip(double v) {
   std::ostringstream os;
   os.precision(17);
   os << v;
@@ -39,15 +42,14 @@ struct Deck {
   [[noreturn]] void refuse(const std::string& msg) const { throw SceneError(file + " (a Peridigm deck): " + msg); }
 };
 
-std::string joined(const std::string& path, const std::string& key) {
-  return "'" + (path.empty() ? key : path + "/" + key) + "'";
-}
+/// "path/key" ("key" at the top level).
+std::string joined(const std::string& path, const std::string& key) { return path.empty() ? key : path + "/" + key; }
 
 /// What a Teuchos entry holds, for a message.
 std::string described(const Teuchos::ParameterEntry& e) {
   if (e.isList()) return "a list";
   if (e.isType<std::string>()) return "the text " + quote(e.getValue<std::string>(static_cast<std::string*>(nullptr)), 60);
-  if (e.isType<double>()) return "the number " + shortest(e.getValue<double>(static_cast<double*>(nullptr)));
+  if (e.isType<double>()) return "the number " + roundTrip(e.getValue<double>(static_cast<double*>(nullptr)));
   if (e.isType<int>()) return "the number " + std::to_string(e.getValue<int>(static_cast<int*>(nullptr)));
   if (e.isType<bool>()) return std::string("the boolean ") + (e.getValue<bool>(static_cast<bool*>(nullptr)) ? "true" : "false");
   return "a value of type " + e.getAny().typeName();
@@ -61,7 +63,7 @@ struct Section {
   std::string path;
 
   bool has(const std::string& k) const { return pl.isParameter(k); }
-  std::string key(const std::string& k) const { return joined(path, k); }
+  std::string key(const std::string& k) const { return "'" + joined(path, k) + "'"; }
 
   const Teuchos::ParameterEntry& entry(const std::string& k) const {
     const Teuchos::ParameterEntry* e = pl.getEntryPtr(k);
@@ -71,7 +73,7 @@ struct Section {
   Section sub(const std::string& k) const {
     const Teuchos::ParameterEntry& e = entry(k);
     if (!e.isList()) deck.refuse(key(k) + " is " + described(e) + ", not a list");
-    return Section{deck, pl.sublist(k), path.empty() ? k : path + "/" + k};
+    return Section{deck, pl.sublist(k), joined(path, k)};
   }
   std::string text(const std::string& k) const {
     const Teuchos::ParameterEntry& e = entry(k);
@@ -92,21 +94,19 @@ struct Section {
       v = e.getValue<double>(static_cast<double*>(nullptr));
     } else if (e.isType<int>()) {
       v = e.getValue<int>(static_cast<int*>(nullptr));
-    } else if (e.isType<std::string>()) {
+    } else if (e.isType<std::string>()) {  // blanks around it allowed; out of double's range: not read
       const std::string s = e.getValue<std::string>(static_cast<std::string*>(nullptr));
-      std::size_t used = 0;
-      try {
-        v = std::stod(s, &used);
-      } catch (const std::exception&) {
-        read = false;
-      }
-      read = read && s.find_first_not_of(" \t", used) == std::string::npos &&
-             s.find_first_of("xXnNiI") == std::string::npos;  // no hexadecimal, nan or inf
+      const std::size_t b = s.find_first_not_of(" \t"), end = s.find_last_not_of(" \t");
+      const std::string t = b == std::string::npos ? "" : s.substr(b, end - b + 1);
+      char* stop = nullptr;
+      errno = 0;
+      if (decimalCharacters(t)) v = std::strtod(t.c_str(), &stop);
+      read = decimalCharacters(t) && *stop == '\0' && errno != ERANGE;
     } else {
       read = false;
     }
     if (!read) deck.refuse(key(k) + " is " + described(e) + "; it must be " + rule);
-    if (!std::isfinite(v) || !ok(v)) deck.refuse(key(k) + " is " + shortest(v) + "; it must be " + rule);
+    if (!std::isfinite(v) || !ok(v)) deck.refuse(key(k) + " is " + roundTrip(v) + "; it must be " + rule);
     return v;
   }
   template <class Ok>
@@ -294,7 +294,7 @@ bool evaluate(const Node& n, const std::array<double, 4>& p, double& out) {
 std::array<double, 4> linearInT(const Deck& deck, const std::string& where, const Teuchos::ParameterEntry& e) {
   std::string expr;
   if (e.isType<std::string>()) expr = e.getValue<std::string>(static_cast<std::string*>(nullptr));
-  else if (e.isType<double>()) expr = shortest(e.getValue<double>(static_cast<double*>(nullptr)));
+  else if (e.isType<double>()) expr = roundTrip(e.getValue<double>(static_cast<double*>(nullptr)));
   else if (e.isType<int>()) expr = std::to_string(e.getValue<int>(static_cast<int*>(nullptr)));
   else deck.refuse(where + " is " + described(e) + ", not an expression");
   const std::string shown = quote(expr, 60);
@@ -339,17 +339,15 @@ std::array<double, 4> linearInT(const Deck& deck, const std::string& where, cons
 // ---------------------------------------------------------------------------------------------
 
 struct DeckMaterial {
-  std::string name;
   double E = 0, nu = 0, K = 0, G = 0, hourglass = 0;
   std::string from;          // the two constants used
   bool plastic = false;
   double yieldStress = 0, hardening = 0;
 };
 
-DeckMaterial readMaterial(const Section& m, const std::string& name) {
+DeckMaterial readMaterial(const Section& m) {
   const std::string model = m.text("Material Model");
   DeckMaterial mat;
-  mat.name = name;
   if (model == "Elastic Plastic Correspondence") mat.plastic = true;
   else if (model != "Elastic Correspondence")
     m.deck.refuse(m.key("Material Model") + " is " + quote(model) +
@@ -379,10 +377,10 @@ DeckMaterial readMaterial(const Section& m, const std::string& name) {
   else if (pair == std::array<int, 2>{0, 2}) E = a, nu = (3 * b - a) / (6 * b);
   else if (pair == std::array<int, 2>{2, 1}) E = 3 * a * (1 - 2 * b), nu = b;
   else E = 2 * a * (1 + b), nu = b;
-  const std::string both = joined(m.path, names[pair[0]]) + " and '" + names[pair[1]] + "'";
+  const std::string both = m.key(names[pair[0]]) + " and '" + names[pair[1]] + "'";
   if (!std::isfinite(E) || !std::isfinite(nu)) m.deck.refuse(both + " are too large to convert to Young's modulus and Poisson's ratio");
   if (!(nu > -1 && nu < 0.5))
-    m.deck.refuse(both + " give Poisson's ratio " + shortest(nu) + ", outside -1 < nu < 0.5 (K and G must be above 0)");
+    m.deck.refuse(both + " give Poisson's ratio " + roundTrip(nu) + ", outside -1 < nu < 0.5 (K and G must be above 0)");
   mat.E = E;
   mat.nu = nu;
   mat.K = E / (3 * (1 - 2 * nu));
@@ -393,7 +391,7 @@ DeckMaterial readMaterial(const Section& m, const std::string& name) {
     const double d = derived.at(k);
     const double off = k == names[1] ? std::abs(v - d) : std::abs(v - d) / std::max(std::abs(v), std::abs(d));
     if (!(off <= kAgreement))
-      m.deck.refuse(m.key(k) + " is " + shortest(v) + " but " + names[pair[0]] + " and " + names[pair[1]] + " give " + shortest(d) +
+      m.deck.refuse(m.key(k) + " is " + roundTrip(v) + " but " + names[pair[0]] + " and " + names[pair[1]] + " give " + roundTrip(d) +
                     " (they differ by more than 1e-6); give two elastic constants, or ones that agree");
   }
   mat.from = names[pair[0]] + " and " + names[pair[1]];
@@ -463,10 +461,10 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   const std::string dtype = disc.text("Type");
   if (dtype != "Exodus")
     deck.refuse(disc.key("Type") + " is " + quote(dtype) + "; perinox translates Exodus meshes (Type Exodus)");
-  const std::string mesh = absolutePath(deckPath, disc.text("Input Mesh File"));
+  const std::string meshGiven = disc.text("Input Mesh File"), mesh = absolutePath(deckPath, meshGiven);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(mesh, ec))
-    deck.refuse(disc.key("Input Mesh File") + " is " + quote(disc.text("Input Mesh File"), 80) + ", which " +
+    deck.refuse(disc.key("Input Mesh File") + " is " + quote(meshGiven, 80) + ", which " +
                 (std::filesystem::exists(mesh, ec) ? "is not a file" : "does not exist") + " (looked for " + quote(mesh, 200) + ")");
   for (const std::string& k : disc.names())
     if (k != "Type" && k != "Input Mesh File" && k != "Omit Bonds Between Blocks" && k != "Verbose")
@@ -475,7 +473,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   // Materials and blocks.
   const Section mats = p.sub("Materials");
   std::map<std::string, DeckMaterial> materials;
-  for (const std::string& name : mats.names()) materials.emplace(name, readMaterial(mats.sub(name), name));
+  for (const std::string& name : mats.names()) materials.emplace(name, readMaterial(mats.sub(name)));
   if (materials.empty()) deck.refuse("'Materials' is empty: the deck has no materials");
   const Section blocks = p.sub("Blocks");
   struct BlockUse {
@@ -496,7 +494,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     const double h = b.number("Horizon", "a finite number above 0", [](double v) { return v > 0; });
     if (horizon < 0) horizon = h, horizonFrom = b.key("Horizon");
     else if (h != horizon)
-      deck.refuse(b.key("Horizon") + " is " + shortest(h) + " but " + horizonFrom + " is " + shortest(horizon) +
+      deck.refuse(b.key("Horizon") + " is " + roundTrip(h) + " but " + horizonFrom + " is " + roundTrip(horizon) +
                   "; perinox uses one horizon for all blocks, and these blocks' horizons differ");
     std::istringstream names(b.text("Block Names"));
     for (std::string n; names >> n;) {
@@ -511,8 +509,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
 
   // Solver: quasi-static load steps, or Verlet on a kinematic (fully prescribed) deck.
   const Section solver = p.sub("Solver");
-  const double t0 = solver.number("Initial Time", "0 (perinox's load factor is t / Final Time)", [](double v) { return v == 0; }, 0.0);
-  (void)t0;
+  solver.number("Initial Time", "0 (perinox's load factor is t / Final Time)", [](double v) { return v == 0; }, 0.0);
   const double finalTime = solver.number("Final Time", "a finite number above 0", [](double v) { return v > 0; });
   int steps = 1, maxIterations = 25;
   std::string solverName;
@@ -532,7 +529,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     const double dt = qs.number("Fixed dt", "a finite number above 0", [](double v) { return v > 0; });
     const double n = std::round(finalTime / dt);
     if (!whole(n) || std::abs(n * dt - finalTime) > 1e-9 * finalTime)
-      deck.refuse(qs.key("Fixed dt") + " is " + shortest(dt) + ", which does not divide 'Solver/Final Time' into " + stepRule + " of steps");
+      deck.refuse(qs.key("Fixed dt") + " is " + roundTrip(dt) + ", which does not divide 'Solver/Final Time' into " + stepRule + " of steps");
     steps = static_cast<int>(n);
     out.kinematicOnly = true;
     notes << "Verlet with every displacement prescribed: its " << steps << " time steps are load steps. ";
@@ -547,7 +544,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     }
   }
 
-  // Boundary conditions: prescribed displacements on the mesh's node sets.
+  // Boundary conditions on the mesh's node sets: prescribed displacements, and body forces as loads.
   ParameterList& regions = sc.sublist("Regions");
   ParameterList& conditions = sc.sublist("Boundary Conditions");
   std::map<std::pair<std::string, std::string>, std::array<double, 4>> prescribed;
@@ -683,15 +680,15 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   std::ostringstream what;
   what << "Translated from the Peridigm deck " << deckPath << ". ";
   for (const auto& [name, m] : materials)
-    what << "material " << quote(name, 60) << ": K = " << shortest(m.K) << ", G = " << shortest(m.G) << ", E = " << shortest(m.E)
-         << ", nu = " << shortest(m.nu) << " (from " << m.from
+    what << "material " << quote(name, 60) << ": K = " << roundTrip(m.K) << ", G = " << roundTrip(m.G) << ", E = " << roundTrip(m.E)
+         << ", nu = " << roundTrip(m.nu) << " (from " << m.from
          << "), Hencky (Peridigm's correspondence material is a hypoelastic rate form: the two agree to the order of the strain), "
-         << (m.hourglass > 0 ? "hourglass coefficient " + shortest(m.hourglass) +
+         << (m.hourglass > 0 ? "hourglass coefficient " + roundTrip(m.hourglass) +
                                    " (Model/G Form = Peridigm Hourglass: each particle's Silling G gives the family Peridigm's stabilising stiffness)"
                              : std::string("no hourglass control"))
          << (m.plastic ? ", J2 plasticity with linear hardening" : "") << ". ";
   what << "Linear solver: scalable, matrix-free, Eisenstat-Walker (3D; --set Solver/Linear Solver Preset=... to change). ";
-  what << "Displacements: t = load factor x Final Time (" << shortest(finalTime)
+  what << "Displacements: t = load factor x Final Time (" << roundTrip(finalTime)
        << "). Node sets select the elements touching their nodes, as in Peridigm. A Block_Data force sum is a Reaction probe: "
           "the force the supports exert, Peridigm's sum with the opposite sign. "
        << notes.str();

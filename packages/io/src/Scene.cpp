@@ -1079,7 +1079,7 @@ struct SceneBuild {
   /// Global id of disc's particle i.
   long long gid(int i) const { return distributed() ? problem.globalId[i] : i; }
   /// Whether a particle (a global id) is owned by this rank; every particle when replicated.
-  bool owns(long long g) const { return !distributed() || std::binary_search(problem.owned.begin(), problem.owned.end(), g); }
+  bool owns(long long g) const { return problem.owns(g); }
 
   Section section(const std::string& name) const { return {pl.sublist(name), schema.sublist(name), name, file}; }
   const std::vector<int>& region(const std::string& key, const std::string& name) const {
@@ -2174,19 +2174,6 @@ ParameterList readYamlDeck(const std::string& path) {
   return pl;
 }
 
-/// Free displacement components over the ranks (owned particles).
-long long freeUnknowns(const ProblemSpec& P, const Teuchos::Comm<int>& comm) {
-  long long n = 0;
-  for (int i = 0; i < P.disc.size(); ++i) {
-    const long long g = P.distributed ? P.globalId[i] : i;
-    if (P.distributed && !std::binary_search(P.owned.begin(), P.owned.end(), g)) continue;
-    for (int c = 0; c < P.disc.dim; ++c) n += !((P.fixedMask[i] >> c) & 1u);
-  }
-  long long total = n;
-  Teuchos::reduceAll(comm, Teuchos::REDUCE_SUM, n, Teuchos::outArg(total));
-  return total;
-}
-
 }  // namespace
 
 ParameterList readSceneList(const std::string& path) {
@@ -2218,7 +2205,9 @@ Scene loadScene(const std::string& path, const std::vector<std::string>& overrid
   try {
     Scene sc = buildScene(pl, path, presetDir, comm);
     if (kinematicOnly) {
-      const long long free = freeUnknowns(*sc.problem, comm.is_null() ? *Teuchos::DefaultComm<int>::getComm() : *comm);
+      const ProblemSpec& P = *sc.problem;
+      const long long free = P.particleCount() * P.dim() -
+                             prescribedDofCount(comm.is_null() ? *Teuchos::DefaultComm<int>::getComm() : *comm, P);
       if (free > 0)
         fail(path, "'Solver/Verlet' is explicit dynamics, which perinox does not solve; a Verlet deck runs only when every "
                    "displacement is prescribed (the motion is then kinematic), and this one leaves " + std::to_string(free) +

@@ -85,6 +85,9 @@ struct ProblemSpec {
   long long particleCount() const { return distributed ? globalCount : disc.size(); }
   /// Whether disc holds global particle g (any g of the body unless distributed).
   bool holds(long long g) const;
+  /// Whether this rank owns global particle g (every particle unless distributed): what a count
+  /// over the ranks adds up.
+  bool owns(long long g) const;
   /// Index into disc (and the per-particle arrays) of global particle g: g itself unless
   /// distributed. Throws std::out_of_range when this rank's share does not hold g.
   int index(long long g) const;
@@ -194,6 +197,9 @@ bool preventsRigidMotion(const ProblemSpec& problem);
 /// The same over the ranks of comm (collective): a distributed problem's rigidModeGram summed over
 /// the ranks; a replicated one's on its own. Defined in PeridynamicEvaluator.cpp.
 bool preventsRigidMotion(const Teuchos::Comm<int>& comm, const ProblemSpec& problem);
+/// The prescribed displacement components (fixedMask bits) of the whole body, counted over the
+/// ranks' owned particles (collective). Defined in PeridynamicEvaluator.cpp.
+long long prescribedDofCount(const Teuchos::Comm<int>& comm, const ProblemSpec& problem);
 
 /// Checks a problem built in C++ (or from a scene) for what the evaluator cannot work with: array
 /// sizes against the particle count and dimension, finite coordinates, volumes, loads and material
