@@ -57,6 +57,21 @@ std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& p
   return v;
 }
 
+std::vector<double> referenceProbeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe, const ReferenceDef& ref) {
+  const int D = ev.problem().dim();
+  std::vector<double> s(D + 1, 0.0), g(D + 1, 0.0);
+  for (int p : probe.particles)
+    if (ev.ownedIndex(p) >= 0) {
+      const Vec3& X = ev.problem().disc.X[ev.problem().index(p)];
+      for (int c = 0; c < D; ++c) s[c] += ref.displacement(X, c);
+      s[D] += 1;
+    }
+  Teuchos::reduceAll(*ev.comm(), Teuchos::REDUCE_SUM, D + 1, s.data(), g.data());
+  std::vector<double> v(D);
+  for (int c = 0; c < D; ++c) v[c] = g[c] / g[D];
+  return v;
+}
+
 /// e_u = sum_i |u_i - u_ref,i| / |u_ref,i| V_i / sum_i V_i over real particles with u_ref != 0.
 double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref, const std::vector<double>& uOwned) {
   const auto& d = ev.problem().disc;

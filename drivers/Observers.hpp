@@ -43,6 +43,10 @@ std::vector<double> probeValue(const PeridynamicEvaluator& ev, const ProbeDef& p
                                const Thyra::VectorBase<double>& x, const std::vector<double>& uOwned,
                                const std::vector<ParticleOutput>* outs = nullptr);
 
+/// The scene's analytic reference (at load factor 1) as a Displacement probe reads it: the mean of
+/// u_ref over the probe's particles (collective).
+std::vector<double> referenceProbeValue(const PeridynamicEvaluator& ev, const ProbeDef& probe, const ReferenceDef& ref);
+
 /// e_u = sum_i |u_i - u_ref,i| / |u_ref,i| V_i / sum_i V_i over real particles with u_ref != 0 (collective).
 double displacementError(const PeridynamicEvaluator& ev, const ReferenceDef& ref, const std::vector<double>& uOwned);
 

@@ -345,6 +345,10 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
   if (!facts.resumedFrom.is_null()) j["resumed_from"] = facts.resumedFrom;
   j["effects"] = facts.effects;
   j["linear_solver"] = scene.solver.linearSolverName;
+  j["forcing_term"] = scene.solver.forcingTerm;
+  if (scene.solver.automatic)
+    j["linear_solver_auto"] = {{"preset", scene.solver.linearSolverName}, {"jacobian", scene.solver.jacobian},
+                               {"forcing_term", scene.solver.forcingTerm}, {"reason", scene.solver.autoReason}};
   j["jacobian"] = scene.solver.jacobian;
   if (scene.solver.jacobian != "Assembled") j["preconditioner_matrix"] = scene.solver.preconditionerMatrix;
   j["matrix_bytes"] = facts.matrixBytes;
@@ -434,6 +438,12 @@ nlohmann::json summaryJson(const Scene& scene, const RunResult& res, const RunFa
     probes[res.probes[k].first] = list;
   }
   j["probes"] = probes;
+  if (!res.probeReferences.empty()) {
+    json refs = json::object();
+    for (const auto& [name, v] : res.probeReferences)
+      refs[name] = {{"load_factor", 1.0}, {"displacement", v}, {"reference", scene.reference.type}};
+    j["probe_references"] = refs;
+  }
   j["continuation"] = scene.solver.continuation;
   if (arcLength) {
     json lp = json::array();

@@ -377,7 +377,7 @@ Solved solveScene(const Scene& scene, const Teuchos::RCP<PeridynamicEvaluator>& 
   for (std::size_t k = 0; k < scene.probes.size(); ++k) res.probes[k].first = scene.probes[k].name;
   if (speak)
     std::cout << "perinox: " << scene.title << " | " << res.particles << " particles, " << res.dofs << " free DOFs, "
-              << comm->getSize() << " rank(s), linear solver " << scene.solver.linearSolverName << std::endl;
+              << comm->getSize() << " rank(s), linear solver " << linearSolverPhrase(scene.solver) << std::endl;
   ProbeRecorder probes(*evaluator, scene, res);
   const SolveContext context{scene, evaluator, model, options, checkpointFolder, probes, exodus, speak};
   if (scene.solver.continuation == "Arc Length") return arcLengthContinuation(context, res);
@@ -511,6 +511,9 @@ RunResult runScene(const Scene& scene, const Teuchos::RCP<const Teuchos::Comm<in
   if (scene.reference.type != "None") {
     res.hasError = true;
     res.errorU = displacementError(*evaluator, scene.reference, evaluator->ownedDisplacements(x));
+    for (const ProbeDef& probe : scene.probes)
+      if (probe.quantity == "Displacement")
+        res.probeReferences.emplace_back(probe.name, referenceProbeValue(*evaluator, probe, scene.reference));
   }
   const bool vtu = scene.output.vtk && scene.output.format != "Exodus";
   agreed(*comm, [&] { writeFields(*evaluator, x, staging, vtu, rank, comm->getSize(), scene.probes); });

@@ -31,6 +31,8 @@ struct RunResult {
   double limitLoad = std::numeric_limits<double>::quiet_NaN();
   bool hasError = false;
   double errorU = 0;   // e_u of seed 000 eq. 56 at the final state
+  // Displacement probe name -> the scene's reference read as that probe (load factor 1).
+  std::vector<std::pair<std::string, std::vector<double>>> probeReferences;
   double wallTime = 0;
   long long particles = 0, dofs = 0;
   std::string outputDir;

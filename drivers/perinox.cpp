@@ -209,7 +209,7 @@ nlohmann::json schemaJson(const Teuchos::ParameterList& list, const std::string&
     out[prefix + name] = k;
   }
   if (prefix.empty() && out.contains("Solver/Linear Solver Preset")) {
-    std::vector<std::string> presets{"custom"};
+    std::vector<std::string> presets{"auto", "custom"};
     std::error_code ec;
     for (const auto& f : std::filesystem::directory_iterator(presetDir, ec))
       if (f.path().extension() == ".xml") presets.push_back(f.path().stem().string());
@@ -267,7 +267,7 @@ int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Te
             << "  effects: " << (P.plastic() ? "plasticity" : "elastic") << (P.damage ? ", damage" : "")
             << (P.blocks.empty() ? "" : ", " + std::to_string(P.blocks.size()) + " blocks") << "\n"
             << "  solver: " << scene.solver.method << ", " << scene.solver.continuation << ", linear solver "
-            << scene.solver.linearSolverName << ", Jacobian " << scene.solver.jacobian << "\n"
+            << linearSolverPhrase(scene.solver) << "\n"
             << "  regions (particles):";
   for (const auto& [name, n] : regions) std::cout << " '" << name << "' " << n << ";";
   std::cout << "\n";

@@ -6,7 +6,8 @@
 Writes OUTDIR/deformed.png (real particles on the deformed configuration, coloured by
 sigma_xx and by |u|, and by the damage index and the equivalent plastic strain where the run has
 them) and OUTDIR/probes.png (probe values against the load factor: displacements on the left
-axis, reactions on the right, each labelled with its quantity and the scene's unit of it).
+axis, reactions on the right, each labelled with its quantity and the scene's unit of it; where the
+scene has an analytic reference, a star marks what it gives each displacement probe at load factor 1).
 """
 import csv
 import json
@@ -101,6 +102,11 @@ def main(out):
                 comp = ("max", "mean")[c] if key == "plastic_strain" else "xyz"[c]
                 lines += target.plot(lf, [h[key][c] for h in hist], marker="o", linestyle=styles[kinds.index(key) % 3],
                                      label=f"{name} {key}[{comp}]")
+                ref = summary.get("probe_references", {}).get(name)
+                if ref and key == "displacement":
+                    lines += target.plot([ref["load_factor"]], [ref["displacement"][c]], marker="*", markersize=13,
+                                         linestyle="none", color=lines[-1].get_color(), markeredgecolor="k",
+                                         label=f"{name} {key}[{comp}]: {ref['reference']} reference")
         for key, a in axis_of.items():
             if a is not ax or key == kinds[0]:
                 a.set_ylabel(units.get(key, key) if a is not ax or len(kinds) < 3 else " / ".join(units.get(k, k) for k in kinds if axis_of[k] is ax))

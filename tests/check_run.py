@@ -15,6 +15,8 @@ Checks:
   --max-error X        summary.json's e_u is at most X
   --probe NAME[@LF] C V RTOL  probe NAME, component C, at the last step (or the step with load
                        factor nearest LF) is V within RTOL relative
+  --probe-reference NAME C V RTOL  summary.json's probe_references: the scene's analytic reference
+                       read as probe NAME (load factor 1), component C, is V within RTOL relative
   --normalised-by WHAT  every step's residual was normalised by WHAT ("reaction" or "external force")
   --expect-from-scene XML  read the scene's top-level "Expected Outcome": "converged" (exit 0,
                        converged) or "failure: TEXT" (exit 3, TEXT in summary.json's failure, the
@@ -71,6 +73,7 @@ def main():
     ap.add_argument("--max-error", type=float)
     ap.add_argument("--quadratic", action="store_true")
     ap.add_argument("--probe", nargs=4, action="append", default=[])
+    ap.add_argument("--probe-reference", nargs=4, action="append", default=[])
     ap.add_argument("--normalised-by")
     ap.add_argument("--expect-from-scene")
     ap.add_argument("--last-load-factor", nargs=2, type=float,
@@ -216,7 +219,7 @@ def main():
         for d in (a.out, a.out + ".partial"):
             if os.path.exists(d):
                 fail(f"{d} exists but the run should have written nothing")
-    if a.converged or a.max_error is not None or a.quadratic or a.probe or a.normalised_by:
+    if a.converged or a.max_error is not None or a.quadratic or a.probe or a.normalised_by or a.probe_reference:
         with open(os.path.join(a.out, "summary.json")) as f:
             s = json.load(f)
         if a.converged and not s["converged"]:
@@ -243,6 +246,14 @@ def main():
             print(f"probe {name}[{comp}] = {got:.8g}, reference {want:.8g}, rel. diff {abs(got - want) / abs(want):.3g}")
             if abs(got - want) > float(rtol) * abs(want):
                 fail(f"probe {name}[{comp}] = {got} differs from {want} by more than {rtol} relative")
+        for name, comp, value, rtol in a.probe_reference:
+            ref = s.get("probe_references", {}).get(name)
+            if ref is None:
+                fail(f"summary.json has no probe_references entry for '{name}'")
+            got, want = ref["displacement"][int(comp)], float(value)
+            print(f"reference read as probe {name}[{comp}] = {got:.8g}, expected {want:.8g}")
+            if abs(got - want) > float(rtol) * abs(want):
+                fail(f"the reference read as probe {name}[{comp}] = {got} differs from {want} by more than {rtol} relative")
         if a.normalised_by:
             for st in s["steps"]:
                 if st["normalised_by"] != a.normalised_by:

@@ -5,7 +5,7 @@ perinox_quick_tests(
   # packages, alone
   core_lattice core_families core_particle_file core_regions material_tangent material_analytic material_validation
   model_tangent stepping_load_stepper stepping_arc_length evaluator_jacobian evaluator_jacobian_np2 partition_np2
-  solver_mumps solver_two_stage io_exodus_mesh derivative_cantilever_np1 derivative_tension_block_np2
+  solver_mumps solver_two_stage solver_auto_choice io_exodus_mesh derivative_cantilever_np1 derivative_tension_block_np2
   # the driver: verification, ranks, damage, matrix-free multigrid, stress points, arc length, meshes
   verify_cantilever verify_tension_block verify_hydrostatic_scene mpi_cantilever_np2 damage_detach_np1
   scalable_mf_tension_block_np1 stresspoints_tension_block_np1 hard_shallow_arch exodus_bar_np1

@@ -670,11 +670,10 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   ParameterList& so = sc.sublist("Solver");
   so.set("Load Steps", steps);
   so.set("Max Newton Iterations", maxIterations);
-  // Decks are 3D meshes: the matrix-free scalable solver (Peridigm's tensile deck: 12 s; with the
-  // default assembled GMRES + ILU, its first step had not converged after 7 minutes).
-  so.set("Linear Solver Preset", std::string("scalable"));
-  so.set("Jacobian", std::string("Matrix-Free"));
-  so.set("Forcing Term", std::string("Eisenstat-Walker"));
+  // The linear solver is left to auto (AutoLinearSolver.hpp): Peridigm's tensile deck gets the
+  // matrix-free scalable solver (12 s; the former default, assembled GMRES + ILU, had not converged
+  // its first step after 7 minutes), a small deck a direct solve.
+  so.set("Linear Solver Preset", std::string("auto"));
   sc.sublist("Output").set("Format", std::string("Exodus"));
 
   std::ostringstream what;
@@ -687,7 +686,7 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
                                    " (Model/G Form = Peridigm Hourglass: each particle's Silling G gives the family Peridigm's stabilising stiffness)"
                              : std::string("no hourglass control"))
          << (m.plastic ? ", J2 plasticity with linear hardening" : "") << ". ";
-  what << "Linear solver: scalable, matrix-free, Eisenstat-Walker (3D; --set Solver/Linear Solver Preset=... to change). ";
+  what << "Linear solver: auto, chosen from the problem (--set Solver/Linear Solver Preset=... to choose). ";
   what << "Displacements: t = load factor x Final Time (" << roundTrip(finalTime)
        << "). Node sets select the elements touching their nodes, as in Peridigm. A Block_Data force sum is a Reaction probe: "
           "the force the supports exert, Peridigm's sum with the opposite sign. "

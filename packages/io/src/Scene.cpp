@@ -36,6 +36,7 @@
 #include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/evaluator/Problem.hpp"
 #include "perinox/model/Partition.hpp"
+#include "perinox/solver/AutoLinearSolver.hpp"
 
 namespace perinox {
 
@@ -533,7 +534,7 @@ void solverSchema(ParameterList& so) {
              {"Eisenstat-Walker", "the tolerance follows the residual's decrease (NOX Type 2: 1e-4 at first, then 0.9 (|R_k| / "
                                   "|R_k-1|)^2, between 'Linear Tolerance' and 1e-4; the tangent predictor's system to 1e-3): fewer Krylov "
                                   "iterations, Newton still quadratic"},
-             {"Preset", "as the linear solver preset says ('Forcing Term' in its list); Constant if it says nothing"}},
+             {"Preset", "as the linear solver preset says ('Forcing Term' in its list) or auto chooses; Constant if it says nothing"}},
             "iterative linear solvers: how tightly each Newton system is solved: ");
   setNumber(so, "Linear Tolerance", 1e-12, "iterative linear solvers: relative residual of each Newton system (Forcing Term = Constant), "
             "or the tightest one asked (Eisenstat-Walker)", reals(End::Open, 0, 1e-2, End::Closed));
@@ -542,12 +543,13 @@ void solverSchema(ParameterList& so) {
             {{"Load Stepping", "load factor 0 to 1 in increments"},
              {"Arc Length", "pseudo-arc-length continuation through limit points; see the Arc Length sublist"}});
   arcLengthSchema(so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2"));
-  so.set("Linear Solver Preset", "gmres-ilu", "name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
+  so.set("Linear Solver Preset", "auto", "'auto' (perinox chooses the preset, Jacobian and forcing term from the problem and says why: "
+         "docs/solver-choice.md), the name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
   setChoice(so, "Jacobian", "Preset",
             {{"Assembled", "sparse matrix"}, {"Matrix-Free", "analytic J v from the linearised kernels; nothing assembled"},
              {"Jacobian-Free", "J v by finite differences of the residual"},
-             {"Preset", "as the linear solver preset says; Assembled if it says nothing"}});
+             {"Preset", "as the linear solver preset says (or auto chooses); Assembled if it says nothing"}});
   setChoice(so, "Preconditioner Matrix", "Preset",
             {{"Assembled", "the full Jacobian"}, {"Neighbours", "only couplings within one horizon; memory proportional to the family size"},
              {"None", "no matrix: the Two-Stage preconditioner (scalable) smooths with the matrix-free Jacobian itself"},
@@ -1919,10 +1921,13 @@ Teuchos::RCP<ParameterList> linearSolverList(const SceneBuild& b, const Section&
     if (!given) fail(file, "'Solver/Linear Solver Preset' is custom but 'Solver/Linear Solver' is empty");
     return Teuchos::rcp(new ParameterList(so.list.sublist("Linear Solver")));
   }
-  if (given) fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + name + "'; set the preset to custom");
+  if (given)
+    fail(file, "'Solver/Linear Solver' is given but 'Solver/Linear Solver Preset' is '" + so.get<std::string>("Linear Solver Preset") +
+                   "'; set the preset to custom");
   const auto presets = presetNames(b.presetDir);
   if (std::find(presets.begin(), presets.end(), name) == presets.end()) {
     auto names = presets;
+    names.insert(names.begin(), "auto");
     names.push_back("custom");
     // The list of names while it is short; past that the sentence would pass 300 characters.
     const std::string listed = "it must be " + orList(names);
@@ -1945,6 +1950,22 @@ void readLinearSolver(SceneBuild& b) {
   SolverSettings& s = b.sc.solver;
   const std::string& file = b.file;
   s.linearSolverName = so.get<std::string>("Linear Solver Preset");
+  // auto: the rule of AutoLinearSolver.hpp picks a preset, and the Jacobian and forcing term
+  // wherever the scene leaves them at Preset; a Jacobian the scene gives is a condition of the rule.
+  s.automatic = s.linearSolverName == "auto";
+  if (s.automatic) {
+    const std::string givenJacobian = so.get<std::string>("Jacobian");
+    const bool trustRegion = s.lineSearch.find("Trust Region") != std::string::npos;
+    SolverFeatures f = solverFeatures(*b.comm, b.problem, b.pl.sublist("Discretization").get<std::string>("Type") == "Lattice",
+                                      s.continuation == "Arc Length" || trustRegion,
+                                      s.method == "ADR");
+    f.jacobianGiven = givenJacobian == "Preset" ? "" : givenJacobian;
+    const LinearSolverChoice c = chooseLinearSolver(f);
+    s.linearSolverName = c.preset;
+    s.autoReason = c.reason;
+    s.autoJacobian = c.jacobian;
+    s.autoForcingTerm = c.forcingTerm;
+  }
   s.linearSolver = linearSolverList(b, so, s.linearSolverName);
   std::string presetJacobian = "Assembled", presetPrecMatrix = "Neighbours", presetForcing = "Constant";
   for (auto [key, target] : {std::make_pair("Jacobian", &presetJacobian), std::make_pair("Preconditioner Matrix", &presetPrecMatrix),
@@ -1954,6 +1975,7 @@ void readLinearSolver(SceneBuild& b) {
     *target = s.linearSolver->get<std::string>(key);
     s.linearSolver->remove(key);
   }
+  if (s.automatic) presetJacobian = s.autoJacobian, presetForcing = s.autoForcingTerm;
   s.jacobian = so.get<std::string>("Jacobian");
   if (s.jacobian == "Preset") s.jacobian = presetJacobian;
   if (s.jacobian != "Assembled" && s.jacobian != "Matrix-Free" && s.jacobian != "Jacobian-Free")
@@ -2066,6 +2088,11 @@ void runStep(SceneStep step, SceneBuild& b) {
 
 }  // namespace
 
+std::string linearSolverPhrase(const SolverSettings& s) {
+  const std::string what = s.linearSolverName + ", " + s.jacobian + " Jacobian, " + s.forcingTerm + " forcing";
+  return s.automatic ? "auto: " + what + " (" + s.autoReason + ")" : what;
+}
+
 Teuchos::RCP<const ParameterList> sceneSchema() {
   static auto s = buildSchema();
   return s;
@@ -2099,6 +2126,7 @@ Scene buildScene(ParameterList pl, const std::string& file, const std::string& p
   }
   sc.resolved->sublist("Solver").set("Jacobian", s.jacobian);
   sc.resolved->sublist("Solver").set("Preconditioner Matrix", s.preconditionerMatrix);
+  sc.resolved->sublist("Solver").set("Forcing Term", s.forcingTerm);
   return sc;
 }
 

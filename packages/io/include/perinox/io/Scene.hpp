@@ -83,11 +83,18 @@ struct SolverSettings {
     int deflectionComponent = 1;
   } arc;
   Teuchos::RCP<Teuchos::ParameterList> linearSolver;  // Stratimikos list
-  std::string linearSolverName;                       // preset name or "custom"
+  std::string linearSolverName;                       // preset name or "custom" (auto: the preset it chose)
+  bool automatic = false;                             // Linear Solver Preset = auto (AutoLinearSolver.hpp)
+  std::string autoReason, autoJacobian, autoForcingTerm;  // auto's choice and why
   std::string jacobian = "Assembled";                 // Assembled, Matrix-Free, Jacobian-Free
   std::string preconditionerMatrix = "Neighbours";    // matrix-free: Assembled or Neighbours
   double jfnkLambda = 1e-6;
 };
+
+/// The linear solver in a phrase: "auto: scalable, Matrix-Free Jacobian, Eisenstat-Walker forcing
+/// (why)", or the preset or custom list named with its Jacobian.
+std::string linearSolverPhrase(const SolverSettings& s);
+
 
 struct OutputSettings {
   bool vtk = true;                   // VTU files (with format VTU or Both)

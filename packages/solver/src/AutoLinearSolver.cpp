@@ -1,0 +1,98 @@
+// The automatic linear-solver choice (AutoLinearSolver.hpp).
+#include "perinox/solver/AutoLinearSolver.hpp"
+
+#include <Teuchos_Comm.hpp>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "perinox/evaluator/Problem.hpp"
+
+namespace perinox {
+
+namespace {
+
+std::string count(long long n) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%lld", n);
+  return b;
+}
+
+std::string decimal(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+}  // namespace
+
+LinearSolverChoice chooseLinearSolver(const SolverFeatures& f) {
+  const long long n = f.freeDofs / std::max(1, f.dim);  // free particles, roughly
+  const std::string size = count(f.freeDofs) + " free unknowns in " + count(f.dim) + "D";
+  if (f.explicitSolver) return {"direct", "Assembled", "Constant", "ADR is explicit: no linear system is solved"};
+  if (f.jacobianGiven == "Jacobian-Free")
+    return {"jfnk-ilu", "Jacobian-Free", "Constant", "the Jacobian-free product asked for: GMRES with ILU on the neighbour matrix"};
+  // The stress points' product is not affine: their assembled tangent is cheaper than J v.
+  const bool assembled = f.mustAssemble || f.jacobianGiven == "Assembled" || (f.stressPoints && f.jacobianGiven.empty());
+  const bool matrixFree = f.jacobianGiven == "Matrix-Free";
+  const std::string because = f.mustAssemble                    ? " (assembled: arc length and trust regions need the tangent)"
+                              : f.jacobianGiven == "Assembled"  ? " (the assembled Jacobian asked for)"
+                              : matrixFree                      ? " (the matrix-free Jacobian asked for)"
+                              : f.stressPoints                  ? " (assembled: the stress points' product is not affine)"
+                                                                : "";
+  // Small problems: a factorisation costs less than any preconditioner's set-up. KLU2 (direct, one
+  // rank) is fastest on a short-horizon lattice; it fills in fast with irregular particles and
+  // long horizons.
+  const long long smallLimit = f.dim == 1 ? (1LL << 62) : f.dim == 2 ? 2500 : 1000;
+  if (!matrixFree && f.ranks == 1 && (f.dim == 1 || (n <= smallLimit && f.lattice && f.horizonFactor <= 2.0)))
+    return {"direct", "Assembled", "Constant",
+            size + (f.dim == 1 ? ": a banded matrix" : " on a lattice with a short horizon") + ": a sparse direct solve (KLU2)" + because};
+  // Where a direct solve beats the multigrid preconditioner, GMRES preconditioned by a kept MUMPS
+  // factorisation (renewed once its extra iterations cost a factorisation) beats it again: it
+  // factorises a few times a run instead of every Newton iteration. That is: small problems; in 2D
+  // weak stabilisation (G < 0.1: the multigrid needs 3-6x its iterations, MUMPS stays faster to
+  // some 50 000 particles), plasticity (tangents soften toward a limit load), particles off a
+  // lattice (a weaker multigrid auxiliary), and damage to 30 000 particles.
+  const bool weak = f.correspondence && !f.stressPoints && f.weakestG < 0.1;
+  std::string what;
+  if (weak) what += ", stabilisation G = " + decimal(f.weakestG) + " < 0.1";
+  if (f.plastic) what += ", plastic";
+  if (f.damage) what += ", damage";
+  if (!f.lattice) what += ", particles off a lattice";
+  const bool kept = n <= smallLimit || (f.dim == 2 && (weak || f.plastic || !f.lattice) && n <= 60000) ||
+                    (f.dim == 2 && f.damage && n <= 30000);
+  if (kept)
+    return {"gmres-mumps", assembled ? "Assembled" : "Matrix-Free", "Eisenstat-Walker",
+            size + what + ": GMRES preconditioned by a kept MUMPS factorisation, Eisenstat-Walker forcing" + because};
+  if (assembled)
+    return {"scalable", "Assembled", "Constant", size + what + ": GMRES with the two-stage multigrid preconditioner" + because};
+  return {"scalable", "Matrix-Free", "Eisenstat-Walker",
+          size + what + ": matrix-free GMRES with the two-stage multigrid preconditioner, Eisenstat-Walker forcing"};
+}
+
+SolverFeatures solverFeatures(const Teuchos::Comm<int>& comm, const ProblemSpec& problem, bool lattice, bool mustAssemble,
+                              bool explicitSolver) {
+  SolverFeatures f;
+  f.dim = problem.dim();
+  f.freeDofs = problem.particleCount() * f.dim - prescribedDofCount(comm, problem);
+  f.ranks = comm.getSize();
+  f.lattice = lattice;
+  f.horizonFactor = problem.disc.dx > 0 ? problem.disc.horizon / problem.disc.dx : 3.0;
+  f.stressPoints = problem.stressPoints;
+  f.damage = problem.damage;
+  f.plastic = problem.plastic();
+  f.correspondence = problem.correspondence;
+  // Silling's G in force: a Peridigm hourglass coefficient c acts as about 40 c (docs/peridigm.md:
+  // 14-65 c on the families measured there).
+  const auto silling = [&](const StabilizationSpec& s) {
+    return s.form == StabilizationSpec::Form::PeridigmHourglass ? 40.0 * s.G : s.G;
+  };
+  f.weakestG = problem.stabilization ? silling(problem.stabilizationSpec()) : 0.0;
+  if (problem.stabilization)
+    for (const BlockSpec& b : problem.blocks) f.weakestG = std::min(f.weakestG, silling(problem.stabilizationSpec(b)));
+  f.mustAssemble = mustAssemble;
+  f.explicitSolver = explicitSolver;
+  return f;
+}
+
+}  // namespace perinox
