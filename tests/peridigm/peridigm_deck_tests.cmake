@@ -63,6 +63,31 @@ perinox_bad_input(peridigm_constants_disagree ${pd_bad}/constants_disagree.xml "
 perinox_bad_input(peridigm_plastic_no_yield ${pd_bad}/plastic_no_yield.xml "'Materials/Steel/Yield Stress' is missing")
 perinox_bad_input(peridigm_damage_models ${pd_bad}/damage_models.xml "has 'Damage Models', which perinox does not translate")
 perinox_bad_input(peridigm_not_a_deck ${pd_bad}/not_a_deck.yaml "not the map 'Peridigm:' a Peridigm deck holds")
+# Text File decks and node sets a deck defines (numbers inline or in node-set files: a text
+# mesh's line numbers, an Exodus mesh's element number map) select the same particles as the
+# Exodus deck they are written from: every probe agrees to round-off (check_text_mesh_deck.py);
+# on two ranks with the distributed construction too.
+add_test(NAME peridigm_deck_text_mesh COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/peridigm/check_text_mesh_deck.py
+  $<TARGET_FILE:perinox> ${PROJECT_SOURCE_DIR} ${PERINOX_TEST_OUT}/peridigm_deck_text_mesh)
+perinox_mpi_command(pd_mpi2 2)
+add_test(NAME peridigm_deck_text_mesh_np2 COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/peridigm/check_text_mesh_deck.py
+  $<TARGET_FILE:perinox> ${PROJECT_SOURCE_DIR} ${PERINOX_TEST_OUT}/peridigm_deck_text_mesh_np2 --mpi ${pd_mpi2} --)
+set_tests_properties(peridigm_deck_text_mesh peridigm_deck_text_mesh_np2 PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS verification)
+set_tests_properties(peridigm_deck_text_mesh_np2 PROPERTIES PROCESSORS 2)
+set(pd_text ${pd_bad}/text)
+perinox_bad_input(peridigm_node_set_zero ${pd_text}/node_set_zero.xml "'Boundary Conditions/Node Set 1' lists '0'; node numbers are whole numbers from 1")
+perinox_bad_input(peridigm_node_set_beyond ${pd_text}/node_set_beyond.xml "holds 9, but the particle file has 8 particles")
+perinox_bad_input(peridigm_node_set_missing_file ${pd_text}/node_set_missing_file.xml "names the node-set file 'nowhere.txt', which does not exist")
+perinox_bad_input(peridigm_undefined_node_set ${pd_text}/undefined_node_set.xml "is 'nodelist_1', which the deck does not define")
+perinox_bad_input(peridigm_text_mesh_columns ${pd_text}/four_columns.xml "cube_four_columns.txt:4: expected 5 numbers \"x y z block volume\"")
+perinox_bad_input(peridigm_omit_bonds ${pd_text}/omit_bonds.xml "perinox keeps the bonds between blocks")
+# A scene's Ids region: numbers from 1, within the particle file, not on a lattice.
+perinox_bad_input(ids_region_zero ${PROJECT_SOURCE_DIR}/tests/scenes/tension_block_file.xml "holds 0; particle numbers start at 1"
+  --set "Regions/numbered/Type=Ids" --set "Regions/numbered/Ids={3,0}")
+perinox_bad_input(ids_region_on_lattice ${PROJECT_SOURCE_DIR}/xml/tension_block.xml "(Type = Ids) numbers particles of a particle file or an Exodus mesh"
+  --set "Regions/numbered/Type=Ids" --set "Regions/numbered/Ids={3}")
+perinox_bad_input(ids_region_exodus_unknown_id ${pd_bad}/../../../validation/peridigm_decks/ElasticCorrespondenceQSTension/ElasticCorrespondenceQSTension.xml
+  "holds 385, which is no element's id in the mesh's element number map" --set "Regions/numbered/Type=Ids" --set "Regions/numbered/Ids={289,385}")
 # The scene a deck made (the run folder's scene.resolved.xml) is a scene perinox reads as it is.
 add_test(NAME peridigm_deck_resolved_scene COMMAND $<TARGET_FILE:perinox> check ${PERINOX_TEST_OUT}/peridigm_deck_qs_np1/scene.resolved.xml)
 set_tests_properties(peridigm_deck_resolved_scene PROPERTIES ENVIRONMENT "${PERINOX_TEST_ENV}" LABELS verification

@@ -627,6 +627,34 @@ ExodusMesh readExodusMeshRange(const std::string& path, int dim, double thicknes
   return mesh;
 }
 
+std::vector<long long> exodusElementPositions(const std::string& path, int dim, const std::vector<long long>& ids) {
+  OpenMesh m;
+  openMesh(path, dim, m);
+  std::vector<long long> wanted(ids);
+  std::sort(wanted.begin(), wanted.end());
+  wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+  std::vector<long long> positionOf(wanted.size(), -1);
+  std::vector<int> map;
+  for (long long a = 0; a < m.elements; a += kChunk) {
+    const long long n = std::min(kChunk, m.elements - a);
+    map.assign(static_cast<std::size_t>(n), 0);
+    // A mesh without a map reads as 1, 2, ..., n (the library's default).
+    if (ex_get_partial_id_map(m.file.id, EX_ELEM_MAP, a + 1, n, map.data()) < 0) fail(path, "has an unreadable element number map");
+    for (long long k = 0; k < n; ++k) {
+      const auto at = std::lower_bound(wanted.begin(), wanted.end(), static_cast<long long>(map[k]));
+      if (at != wanted.end() && *at == map[k]) {
+        long long& pos = positionOf[static_cast<std::size_t>(at - wanted.begin())];
+        if (pos >= 0) fail(path, "numbers two elements " + std::to_string(map[k]) + " in its element number map");
+        pos = a + k;
+      }
+    }
+  }
+  std::vector<long long> out;
+  out.reserve(ids.size());
+  for (long long id : ids) out.push_back(positionOf[static_cast<std::size_t>(std::lower_bound(wanted.begin(), wanted.end(), id) - wanted.begin())]);
+  return out;
+}
+
 ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness) {
   const ExodusMeshSize size = exodusMeshSize(path, dim);
   return readExodusMeshRange(path, dim, thickness, {0, size.elements, 0, size.nodes},
@@ -645,6 +673,7 @@ namespace {
 ExodusMeshSize exodusMeshSize(const std::string& path, int) { withoutExodus(path); }
 ExodusMesh readExodusMeshRange(const std::string& path, int, double, const ExodusRange&, const ReadPhase&) { withoutExodus(path); }
 ExodusMesh readExodusMesh(const std::string& path, int, double) { withoutExodus(path); }
+std::vector<long long> exodusElementPositions(const std::string& path, int, const std::vector<long long>&) { withoutExodus(path); }
 
 #endif
 

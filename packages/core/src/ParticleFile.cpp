@@ -1,4 +1,5 @@
-// Particle files: one particle per line, "x y z volume [block]"; '#' starts a comment.
+// Particle files: one particle per line, "x y z volume [block]" ('#' starts a comment), or Peridigm's
+// text files, "x y z block volume".
 #include "perinox/core/Discretization.hpp"
 #include "perinox/core/InputFile.hpp"
 
@@ -57,9 +58,18 @@ Discretization emptyParticleSet(const std::string& path, int dim, double horizon
   return d;
 }
 
-/// Appends the particle of one line (number lineNo) to d, if the line holds one.
-void parseLine(const std::string& path, long lineNo, std::string text, Discretization& d) {
+/// Appends the particle of one line (number lineNo) to d, if the line holds one. Columns
+/// VolumeThenBlock: "x y z volume [block]", '#' starts a comment. BlockThenVolume (Peridigm's
+/// text files): exactly "x y z block volume"; a line whose first character (after spaces) is '#',
+/// '/' or '*' is a comment, as Peridigm reads them.
+void parseLine(const std::string& path, long lineNo, std::string text, Discretization& d, ParticleColumns columns) {
   if (text.find('\0') != std::string::npos) fail(path, lineNo, "contains a NUL byte (a particle file is text)");
+  const bool peridigm = columns == ParticleColumns::BlockThenVolume;
+  const char* layout = peridigm ? "\"x y z block volume\"" : "\"x y z volume [block]\"";
+  if (peridigm) {
+    const std::size_t first = text.find_first_not_of(" \t\r");
+    if (first != std::string::npos && (text[first] == '/' || text[first] == '*')) return;
+  }
   const std::size_t hash = text.find('#');
   if (hash != std::string::npos) text.erase(hash);
   std::istringstream ls(text);
@@ -67,36 +77,38 @@ void parseLine(const std::string& path, long lineNo, std::string text, Discretiz
   double v[5];
   int n = 0;
   while (ls >> tok) {
-    if (n == 5) fail(path, lineNo, "too many columns (expected \"x y z volume [block]\")");
+    if (n == 5) fail(path, lineNo, std::string("too many columns (expected ") + layout + ")");
     if (!parseDouble(tok, v[n])) {
       char* end = nullptr;
       const double spelled = std::strtod(tok.c_str(), &end);  // nan, inf, infinity: a number, not finite
       if (end != tok.c_str() && *end == '\0' && !std::isfinite(spelled) && tok.find_first_of("xX") == std::string::npos)
         fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
-      fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected \"x y z volume [block]\")");
+      fail(path, lineNo, "'" + shown(tok) + "' is not a number (expected " + layout + ")");
     }
     if (!std::isfinite(v[n])) fail(path, lineNo, "'" + shown(tok) + "' is not a finite number");
     ++n;
   }
   if (n == 0) return;  // blank or comment-only line
-  if (n < 4)
-    fail(path, lineNo, "expected at least 4 numbers \"x y z volume [block]\", found " + std::to_string(n));
-  if (!(v[3] > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(v[3]) + ")");
-  if (v[3] < kSmallestVolume)
-    fail(path, lineNo, "volume " + num(v[3]) + " is below " + num(kSmallestVolume) + " (products of two volumes would underflow)");
+  if (peridigm && n != 5)
+    fail(path, lineNo, std::string("expected 5 numbers ") + layout + " (Peridigm's text file), found " + std::to_string(n));
+  if (n < 4) fail(path, lineNo, std::string("expected at least 4 numbers ") + layout + ", found " + std::to_string(n));
+  const double volume = peridigm ? v[4] : v[3];
+  if (!(volume > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(volume) + ")");
+  if (volume < kSmallestVolume)
+    fail(path, lineNo, "volume " + num(volume) + " is below " + num(kSmallestVolume) + " (products of two volumes would underflow)");
   int blk = 1;
   if (n == 5) {
     // Accept "2" and "2.0" but not "2.5": block ids are integers.
-    if (v[4] != std::floor(v[4]) || v[4] < 0 || v[4] > INT_MAX)
-      fail(path, lineNo, "block id must be an integer of 0 or more (got " + num(v[4]) + ")");
-    blk = static_cast<int>(v[4]);
+    const double b = peridigm ? v[3] : v[4];
+    if (b != std::floor(b) || b < 0 || b > INT_MAX) fail(path, lineNo, "block id must be an integer of 0 or more (got " + num(b) + ")");
+    blk = static_cast<int>(b);
   }
   if (static_cast<long long>(d.X.size()) >= kMaxParticles)
     fail(path, lineNo, "more than " + std::to_string(kMaxParticles) + " particles (the most perinox reads)");
   Vec3 x = Vec3::Zero();  // unused axes are present in the file but forced to 0
   for (int a = 0; a < d.dim; ++a) x[a] = v[a];
   d.X.push_back(x);
-  d.volume.push_back(v[3]);
+  d.volume.push_back(volume);
   d.block.push_back(blk);
 }
 
@@ -125,12 +137,12 @@ std::ifstream openParticleFile(const std::string& path) {
 }  // namespace
 
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
-                                double thickness, bool families) {
+                                double thickness, bool families, ParticleColumns columns) {
   Discretization d = emptyParticleSet(path, dim, horizon, dx, thickness);
   std::ifstream in = openParticleFile(path);
   std::string text;
   long lineNo = 0;
-  while (std::getline(in, text)) parseLine(path, ++lineNo, text, d);
+  while (std::getline(in, text)) parseLine(path, ++lineNo, text, d, columns);
   if (in.bad()) fail(path, lineNo, "read error");
   if (d.X.empty()) fail(path, lineNo, "no particles in file");
   finish(d);
@@ -138,7 +150,7 @@ Discretization readParticleFile(const std::string& path, int dim, double horizon
   return d;
 }
 
-double particleFileSpacing(const std::string& path, int dim, double thickness) {
+double particleFileSpacing(const std::string& path, int dim, double thickness, ParticleColumns columns) {
   // readParticleFile's parse, keeping only the volumes (8 bytes a particle, not a whole
   // discretisation: every rank of a distributed run reads the file here).
   Discretization d = emptyParticleSet(path, dim, 1.0, 1.0, thickness);  // horizon and spacing unused here
@@ -147,7 +159,7 @@ double particleFileSpacing(const std::string& path, int dim, double thickness) {
   std::string text;
   long lineNo = 0;
   while (std::getline(in, text)) {
-    parseLine(path, ++lineNo, text, d);
+    parseLine(path, ++lineNo, text, d, columns);
     if (!d.volume.empty()) {
       volumes.push_back(d.volume.back());
       d.X.clear();
@@ -183,7 +195,8 @@ long particleFileNewlines(const std::string& path, std::uint64_t begin, std::uin
 }
 
 Discretization readParticleFileRange(const std::string& path, int dim, double horizon, double dx, double thickness,
-                                     std::uint64_t begin, std::uint64_t end, long newlinesBefore, long* lastLine) {
+                                     std::uint64_t begin, std::uint64_t end, long newlinesBefore, long* lastLine,
+                                     ParticleColumns columns) {
   Discretization d = emptyParticleSet(path, dim, horizon, dx, thickness);
   if (lastLine) *lastLine = 0;
   if (begin >= end) {
@@ -209,7 +222,7 @@ Discretization readParticleFileRange(const std::string& path, int dim, double ho
   while (at < end && std::getline(in, text)) {
     at += text.size() + 1;
     if (lastLine) *lastLine = lineNo;
-    parseLine(path, lineNo++, text, d);
+    parseLine(path, lineNo++, text, d, columns);
   }
   if (in.bad()) fail(path, lineNo, "read error");
   finish(d);

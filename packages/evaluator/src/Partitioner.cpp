@@ -284,7 +284,7 @@ Share ownedShare(const Teuchos::RCP<const Teuchos::Comm<int>>& comm, const Parti
   Discretization part;
   throwAgreed<std::runtime_error>(*comm, [&] {
     part = readParticleFileRange(file.path, file.dim, file.horizon, file.dx, file.thickness, begin, end, before,
-                                 &lastLine);
+                                 &lastLine, file.columns);
   });
   long long mine = part.size(), first = 0;
   MPI_Exscan(&mine, &first, 1, MPI_LONG_LONG, MPI_SUM, mc);

@@ -5,6 +5,7 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -456,11 +457,12 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     if (!known.count(k) && k.rfind("Output", 0) != 0)
       deck.refuse("has '" + k + "', which perinox does not translate (it reads Discretization, Materials, Blocks, Boundary Conditions, "
                   "Solver, Compute Class Parameters and Output lists)");
-  // Discretization: an Exodus mesh.
+  // Discretization: an Exodus mesh or a text file ("x y z block volume" lines).
   const Section disc = p.sub("Discretization");
   const std::string dtype = disc.text("Type");
-  if (dtype != "Exodus")
-    deck.refuse(disc.key("Type") + " is " + quote(dtype) + "; perinox translates Exodus meshes (Type Exodus)");
+  if (dtype != "Exodus" && dtype != "Text File")
+    deck.refuse(disc.key("Type") + " is " + quote(dtype) + "; perinox translates Exodus meshes and text files (Type Exodus or Text File)");
+  const bool textFile = dtype == "Text File";
   const std::string meshGiven = disc.text("Input Mesh File"), mesh = absolutePath(deckPath, meshGiven);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(mesh, ec))
@@ -469,6 +471,9 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   for (const std::string& k : disc.names())
     if (k != "Type" && k != "Input Mesh File" && k != "Omit Bonds Between Blocks" && k != "Verbose")
       deck.refuse(disc.key(k) + " is not translated (perinox reads Type and Input Mesh File)");
+  if (disc.has("Omit Bonds Between Blocks") && disc.text("Omit Bonds Between Blocks") != "None")
+    deck.refuse(disc.key("Omit Bonds Between Blocks") + " is " + quote(disc.text("Omit Bonds Between Blocks"), 40) +
+                "; perinox keeps the bonds between blocks (None)");
 
   // Materials and blocks.
   const Section mats = p.sub("Materials");
@@ -544,22 +549,65 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
     }
   }
 
-  // Boundary conditions on the mesh's node sets: prescribed displacements, and body forces as loads.
+  // Boundary conditions on node sets (the mesh's, or defined in the deck by numbers or a file):
+  // prescribed displacements, and body forces as loads.
   ParameterList& regions = sc.sublist("Regions");
   ParameterList& conditions = sc.sublist("Boundary Conditions");
   std::map<std::pair<std::string, std::string>, std::array<double, 4>> prescribed;
   if (p.has("Boundary Conditions")) {
     const Section bcs = p.sub("Boundary Conditions");
+    // Peridigm's names compare upper-cased with blanks as underscores ("Node Set One" = "node_set_one").
+    auto tidy = [](std::string n) {
+      const std::size_t b = n.find_first_not_of(' '), e = n.find_last_not_of(' ');
+      n = b == std::string::npos ? "" : n.substr(b, e - b + 1);
+      for (char& ch : n) ch = ch == ' ' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+      return n;
+    };
+    // Node sets the deck defines: a key holding NODE_SET whose value lists numbers (an int, or a
+    // text with blanks or a leading number) or names a file (relative to the deck's folder).
+    std::map<std::string, std::string> definedSets;  // tidy name -> region name
     for (const std::string& name : bcs.names()) {
       const Teuchos::ParameterEntry& e = bcs.entry(name);
-      if (!e.isList()) {
-        std::string tidy = name;
-        for (char& ch : tidy) ch = ch == ' ' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
-        if (tidy.find("NODE_SET") != std::string::npos)
-          deck.refuse(bcs.key(name) + " defines a node set in the deck (a node-set file or node numbers); perinox takes node sets "
-                      "from the Exodus mesh by name (nodelist_<id>)");
-        deck.refuse(bcs.key(name) + " is " + described(e) + ", not a list (a boundary condition)");
+      if (e.isList()) continue;
+      if (tidy(name).find("NODE_SET") == std::string::npos)
+        deck.refuse(bcs.key(name) + " is " + described(e) + ", not a list (a boundary condition) nor a node set (a key with 'Node Set' in its name)");
+      if (!definedSets.emplace(tidy(name), name).second)
+        deck.refuse(bcs.key(name) + " defines a node set whose name another node set has (Peridigm compares names upper-cased)");
+      ParameterList& r = regions.sublist(name);
+      r.set("Type", std::string("Ids"));
+      if (e.isType<int>()) {
+        r.set("Ids", Teuchos::Array<int>(1, e.getValue<int>(static_cast<int*>(nullptr))));
+        continue;
       }
+      const std::string v = bcs.text(name);
+      const std::size_t b = v.find_first_not_of(" \t"), end = v.find_last_not_of(" \t");
+      const std::string t = v.substr(b, end - b + 1);
+      const bool list = t.find_first_of(" \t") != std::string::npos || std::isdigit(static_cast<unsigned char>(t[0])) || t[0] == '-' ||
+                        t[0] == '+';
+      if (!list) {
+        const std::string file = absolutePath(deckPath, t);
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(file, ec))
+          deck.refuse(bcs.key(name) + " names the node-set file " + quote(t, 80) + ", which " +
+                      (std::filesystem::exists(file, ec) ? "is not a file" : "does not exist") + " (looked for " + quote(file, 200) + ")");
+        r.set("Ids File", file);
+        continue;
+      }
+      Teuchos::Array<int> ids;
+      std::istringstream in(t);
+      std::string tok;
+      while (in >> tok) {
+        char* stop = nullptr;
+        errno = 0;
+        const long long id = std::strtoll(tok.c_str(), &stop, 10);
+        if (*stop != '\0' || errno == ERANGE || id < 1 || id > INT_MAX)
+          deck.refuse(bcs.key(name) + " lists " + quote(tok, 40) + "; node numbers are whole numbers from 1");
+        ids.push_back(static_cast<int>(id));
+      }
+      r.set("Ids", ids);
+    }
+    for (const std::string& name : bcs.names()) {
+      if (!bcs.entry(name).isList()) continue;
       const Section bc = bcs.sub(name);
       const std::string type = bc.text("Type");
       if (type != "Prescribed Displacement" && type != "Body Force")
@@ -569,7 +617,13 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
       if (comp != "x" && comp != "y" && comp != "z") deck.refuse(bc.key("Coordinate") + " is " + quote(comp) + "; it must be x, y or z");
       std::array<double, 4> c = linearInT(deck, bc.key("Value"), bc.entry("Value"));
       for (double& v : c) v *= finalTime;  // t = load factor x Final Time
-      if (!regions.isSublist(ns)) {
+      std::string region = ns;
+      if (const auto def = definedSets.find(tidy(ns)); def != definedSets.end()) {
+        region = def->second;
+      } else if (textFile) {
+        deck.refuse(bc.key("Node Set") + " is " + quote(ns, 60) + ", which the deck does not define (a text-file mesh has no node sets "
+                    "of its own: define it in 'Boundary Conditions' by numbers or a file)");
+      } else if (!regions.isSublist(ns)) {
         ParameterList& r = regions.sublist(ns);
         r.set("Type", std::string("Node Set"));
         r.set("Name", ns);
@@ -579,16 +633,16 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
         if (c[1] != 0 || c[2] != 0 || c[3] != 0)
           deck.refuse(bc.key("Value") + " varies with x, y or z; perinox's body forces are uniform over their region (t times a number)");
         ParameterList& ld = sc.sublist("Loads").sublist(name);
-        ld.set("Region", ns);
+        ld.set("Region", region);
         ld.set("Type", std::string("Body Force"));
         ld.set("Value", array3(axis == 0 ? c[0] : 0.0, axis == 1 ? c[0] : 0.0, axis == 2 ? c[0] : 0.0));
         continue;
       }
-      const auto [it, fresh] = prescribed.emplace(std::make_pair(ns, comp), c);
+      const auto [it, fresh] = prescribed.emplace(std::make_pair(region, comp), c);
       if (!fresh && it->second != c)
         deck.refuse("boundary condition " + quote(name) + " prescribes " + comp + " on " + quote(ns) + " differently from another condition");
       ParameterList& cl = conditions.sublist(name);
-      cl.set("Region", ns);
+      cl.set("Region", region);
       cl.set("Component", comp);
       cl.set("Value", c[0]);
       if (c[1] != 0 || c[2] != 0 || c[3] != 0) cl.set("Gradient", array3(c[1], c[2], c[3]));
@@ -641,8 +695,14 @@ PeridigmScene sceneFromPeridigmDeck(const ParameterList& deckList, const std::st
   sc.set("Title", "Peridigm deck " + deckName);
   ParameterList& d = sc.sublist("Discretization");
   d.set("Dimension", 3);
-  d.set("Type", std::string("Exodus"));
-  d.set("Mesh File", mesh);
+  if (textFile) {
+    d.set("Type", std::string("Particle File"));
+    d.set("Particle File", mesh);
+    d.set("Particle File Columns", std::string("x y z block volume"));
+  } else {
+    d.set("Type", std::string("Exodus"));
+    d.set("Mesh File", mesh);
+  }
   d.set("Horizon", horizon);
   const DeckMaterial& first = *uses.front().mat;
   ParameterList& ml = sc.sublist("Material");

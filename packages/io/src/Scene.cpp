@@ -266,7 +266,10 @@ ParameterList regionTemplate() {
              {"All Fictitious", "needs 'Discretization/Fictitious Sides'"}, {"All Real", ""},
              {"Node Set", "Exodus mesh: the particles of the elements touching the set's nodes (Peridigm's rule)"},
              {"Side Set", "Exodus mesh: the particles of the elements whose sides are listed"},
-             {"Block", "the particles of a block (particle file: 5th column; Exodus: element block)"}});
+             {"Block", "the particles of a block (particle file: 5th column; Exodus: element block)"},
+             {"Ids", "particle file or Exodus mesh: particles by number, 1-based (Peridigm's node numbers): a particle file's n-th "
+                     "particle line (comments and blank lines not counted), an Exodus mesh's element with id n in its element number "
+                     "map (n-th element when it has none)"}});
   setVector(r, p, "Lower", arr<double>({0, 0, 0}), "Box: lower corner", Length::Dim);
   setVector(r, p, "Upper", arr<double>({0, 0, 0}), "Box: upper corner", Length::Dim);
   setChoice<Population>(r, "Population", "Real",
@@ -277,6 +280,9 @@ ParameterList regionTemplate() {
   setVector(r, p, "Point", arr<double>({0, 0, 0}), "Nearest: the point; particles equally near (to 1e-9) tie, and a tie goes to the smallest x, then y, then z (not to the particle order or the ranks)", Length::Dim);
   r.set("Name", "", "Node Set / Side Set / Block: the set's or Exodus block's name in the mesh (give Name or Id)");
   r.set("Id", -1, "Node Set / Side Set / Block: the set's or block's id (>= 0; -1: none, give Name)");
+  r.set("Ids", arr<int>({}), "Ids: the numbers (give Ids or Ids File)");
+  r.set("Ids File", "", "Ids: path (relative to the scene) of a file of numbers, separated by spaces or lines; a line starting "
+                        "with '#', '/' or '*' is a comment (Peridigm's node-set files)");
   return r;
 }
 
@@ -404,6 +410,10 @@ void discretizationSchema(ParameterList& d) {
   d.set("Fictitious Sides", arr<std::string>({}), "sides with a fictitious Dirichlet layer of width delta, each " + orList(sides),
         Teuchos::rcp(new ChoiceList(Teuchos::rcp(new Teuchos::StringValidator(Teuchos::Array<std::string>(sides))))));
   d.set("Particle File", "", "Particle File: path (relative to the scene) of 'x y z volume [block]' lines");
+  setChoice(d, "Particle File Columns", "x y z volume [block]",
+            {{"x y z volume [block]", "perinox's particle files"},
+             {"x y z block volume", "Peridigm's text-file discretisations: exactly these five; lines starting with '#', '/' or '*' are comments"}},
+            "Particle File: the columns of each line: ");
   d.set("Mesh File", "", "Exodus: path (relative to the scene) of the Exodus II mesh (hex, tet, wedge, sphere in 3D; quad, tri, sphere in 2D, areas x Thickness)");
   setNumber(d, "Jitter", 0.0, "random shift of real particles, fraction of the spacing", reals(End::Closed, 0, 1, End::Open));
   setNumber(d, "Jitter Seed", 12345, "seed of the jitter", ints(0));
@@ -1145,6 +1155,80 @@ std::vector<int> meshSetRegion(const SceneBuild& b, const Section& r, const std:
   fail(file, "region '" + region + "': the mesh has no " + type + " with " + what);
 }
 
+/// The numbers of an Ids File: integers separated by spaces or lines; a line whose first
+/// character (after spaces) is '#', '/' or '*' is a comment. One sentence naming the file and line
+/// for anything else.
+std::vector<long long> readIdsFile(const std::string& path) {
+  const std::string text = readInputText(path);
+  std::vector<long long> ids;
+  std::istringstream in(text);
+  std::string line;
+  long lineNo = 0;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#' || line[first] == '/' || line[first] == '*') continue;
+    std::istringstream ls(line);
+    std::string tok;
+    while (ls >> tok) {
+      errno = 0;
+      char* end = nullptr;
+      const long long v = std::strtoll(tok.c_str(), &end, 10);
+      if (end == tok.c_str() || *end != '\0' || errno == ERANGE)
+        fail(path + ":" + std::to_string(lineNo), "'" + printable(tok) + "' is not a whole number (an Ids File holds particle numbers)");
+      if (static_cast<long long>(ids.size()) >= kMaxParticles)
+        fail(path + ":" + std::to_string(lineNo), "more than " + std::to_string(kMaxParticles) + " numbers");
+      ids.push_back(v);
+    }
+  }
+  if (ids.empty()) fail(path, "holds no numbers (an Ids File lists particle numbers)");
+  return ids;
+}
+
+/// The particles of a region of Type Ids: 1-based numbers, a particle file's line order or an
+/// Exodus mesh's element number map (Peridigm's node numbers); every number must name a particle.
+std::vector<int> numberedRegion(const SceneBuild& b, const Section& r, const std::string& region) {
+  const std::string& file = b.file;
+  const std::string dtype = b.pl.sublist("Discretization").get<std::string>("Type");
+  if (dtype != "Particle File" && dtype != "Exodus")
+    fail(file, "region '" + region + "' (Type = Ids) numbers particles of a particle file or an Exodus mesh; this scene's "
+               "'Discretization/Type' is " + dtype);
+  const auto given = r.get<Array<int>>("Ids");
+  const std::string idsFile = r.get<std::string>("Ids File");
+  if (given.empty() == idsFile.empty()) fail(file, "region '" + region + "' (Type = Ids) needs exactly one of 'Ids' and 'Ids File'");
+  std::vector<long long> numbers(given.begin(), given.end());
+  const std::string source = idsFile.empty() ? "'Regions/" + region + "/Ids'" : quote(idsFile);
+  if (!idsFile.empty()) numbers = readIdsFile(b.relativeToScene(idsFile));
+  for (long long n : numbers)
+    if (n < 1) fail(file, "region '" + region + "': " + source + " holds " + std::to_string(n) + "; particle numbers start at 1");
+  std::vector<long long> global;
+  if (dtype == "Particle File") {
+    const long long count = b.problem.particleCount();
+    for (long long n : numbers) {
+      if (n > count)
+        fail(file, "region '" + region + "': " + source + " holds " + std::to_string(n) + ", but the particle file has " +
+                       std::to_string(count) + " particles");
+      global.push_back(n - 1);
+    }
+  } else {
+    const std::vector<long long> at = exodusElementPositions(b.sc.inputFile, b.dim, numbers);
+    for (std::size_t k = 0; k < numbers.size(); ++k) {
+      if (at[k] < 0)
+        fail(file, "region '" + region + "': " + source + " holds " + std::to_string(numbers[k]) +
+                       ", which is no element's id in the mesh's element number map");
+      global.push_back(at[k]);
+    }
+  }
+  std::sort(global.begin(), global.end());
+  global.erase(std::unique(global.begin(), global.end()), global.end());
+  std::vector<int> ids;
+  for (long long g : global)
+    if (!b.distributed()) ids.push_back(static_cast<int>(g));
+    else if (b.problem.holds(g)) ids.push_back(b.problem.index(g));
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
 void checkHorizonFactor(double f, const std::string& file) {
   if (!(f >= 1.0))
     fail(file, "'Discretization/Horizon Factor' must be at least 1: a horizon below the particle spacing leaves particles without neighbours");
@@ -1360,8 +1444,11 @@ ParticleFileSpec particleFile(const SceneBuild& b, const Section& dl, double thi
   if (dl.get<double>("Horizon") < 0) fail(b.file, "'Discretization/Horizon' must be positive (or 0: Horizon Factor x Spacing)");
   path = b.relativeToScene(path);
   // Not given: the spacing the volumes imply (every rank reads the file's volumes once).
-  const double spacing = given > 0 ? given : particleFileSpacing(path, b.dim, thickness);
-  return {path, b.dim, particleHorizon(dl, spacing, given > 0 ? "" : ", the spacing taken from the particles' volumes"), spacing, thickness};
+  const ParticleColumns columns = dl.get<std::string>("Particle File Columns") == "x y z block volume" ? ParticleColumns::BlockThenVolume
+                                                                                                      : ParticleColumns::VolumeThenBlock;
+  const double spacing = given > 0 ? given : particleFileSpacing(path, b.dim, thickness, columns);
+  return {path, b.dim, particleHorizon(dl, spacing, given > 0 ? "" : ", the spacing taken from the particles' volumes"), spacing, thickness,
+          columns};
 }
 
 Discretization readMesh(SceneBuild& b, const Section& dl, double thickness) {
@@ -1420,7 +1507,7 @@ void readDiscretization(SceneBuild& b) {
       b.problem.disc = buildLattice(readLatticeSpec(dl, b.dim, thickness), false);  // families: each rank finds its own
     else if (dtype == "Particle File") {
       const ParticleFileSpec f = particleFile(b, dl, thickness);
-      b.problem.disc = readParticleFile(f.path, f.dim, f.horizon, f.dx, f.thickness, false);
+      b.problem.disc = readParticleFile(f.path, f.dim, f.horizon, f.dx, f.thickness, false, f.columns);
     }
     else
       b.problem.disc = readMesh(b, dl, thickness);
@@ -1631,6 +1718,8 @@ std::vector<int> selectRegion(const SceneBuild& b, const Section& r, const std::
     }
   } else if (type == "Node Set" || type == "Side Set" || type == "Block") {
     ids = meshSetRegion(b, r, name, type);
+  } else if (type == "Ids") {
+    ids = numberedRegion(b, r, name);
   } else {  // All Fictitious or All Real
     for (int i = 0; i < d.size(); ++i)
       if ((d.fictitious[i] != 0) == (type == "All Fictitious")) ids.push_back(i);

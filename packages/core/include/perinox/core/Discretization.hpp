@@ -80,17 +80,24 @@ LatticeSiteCounts countLatticeSites(const LatticeSpec& spec, std::int64_t first,
 /// sites before `first`, so that the jitter continues the whole lattice's random stream.
 Discretization latticeSites(const LatticeSpec& spec, std::int64_t first, std::int64_t last, std::int64_t realBefore);
 
-/// Reads a particle file: one particle per line "x y z volume [block]", '#' starts a comment,
-/// blank lines ignored. dim selects how many coordinates matter (the rest must still be present
-/// as columns x y z). dx is the nominal spacing (used for reports and horizon factors).
-/// Throws std::runtime_error naming the file and line on malformed input.
+/// A particle file's columns: perinox's "x y z volume [block]", or Peridigm's text-file
+/// discretisation, exactly "x y z block volume" (lines starting with '#', '/' or '*' are comments).
+enum class ParticleColumns { VolumeThenBlock, BlockThenVolume };
+
+/// Reads a particle file: one particle per line "x y z volume [block]" (or columns as given),
+/// '#' starts a comment, blank lines ignored. dim selects how many coordinates matter (the rest
+/// must still be present as columns x y z). dx is the nominal spacing (used for reports and
+/// horizon factors). Particle i is the file's i-th particle line (0-based, comments and blank
+/// lines not counted). Throws std::runtime_error naming the file and line on malformed input.
 Discretization readParticleFile(const std::string& path, int dim, double horizon, double dx,
-                                double thickness, bool families = true);
+                                double thickness, bool families = true,
+                                ParticleColumns columns = ParticleColumns::VolumeThenBlock);
 
 /// The nominal spacing a particle file's volumes imply: the median particle's volume as a
 /// length (1D: volume / thickness, the cross-section area), an area's side (2D: volume /
 /// thickness) or a cube's edge (3D). Reads (and checks) the whole file.
-double particleFileSpacing(const std::string& path, int dim, double thickness);
+double particleFileSpacing(const std::string& path, int dim, double thickness,
+                           ParticleColumns columns = ParticleColumns::VolumeThenBlock);
 
 /// A particle file read in parts (one MPI rank's share of its bytes, problemOnLocalParticleFile):
 /// its size in bytes; the newlines in the bytes [begin, end); and the particles of the lines that
@@ -102,7 +109,8 @@ std::uint64_t particleFileSize(const std::string& path);
 long particleFileNewlines(const std::string& path, std::uint64_t begin, std::uint64_t end);
 Discretization readParticleFileRange(const std::string& path, int dim, double horizon, double dx, double thickness,
                                      std::uint64_t begin, std::uint64_t end, long newlinesBefore,
-                                     long* lastLine = nullptr);
+                                     long* lastLine = nullptr,
+                                     ParticleColumns columns = ParticleColumns::VolumeThenBlock);
 
 /// (Re)builds the families of d with a cell-list neighbour search, O(n * family size).
 void buildFamilies(Discretization& d);

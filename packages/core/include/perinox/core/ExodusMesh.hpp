@@ -52,6 +52,11 @@ bool exodusAvailable();
 /// perinox was built without Exodus II.
 ExodusMesh readExodusMesh(const std::string& path, int dim, double thickness);
 
+/// The particles (0-based element positions in file order, as readExodusMesh numbers them) of
+/// elements given by their ids in the mesh's element number map (1, 2, ..., n when the mesh has
+/// none): Peridigm's node numbers. -1 for an id the map does not hold. Reads the map in pieces.
+std::vector<long long> exodusElementPositions(const std::string& path, int dim, const std::vector<long long>& ids);
+
 /// The sizes a distributed read splits: elements (= particles, over every block) and nodes.
 /// Reads the header and the element blocks only; throws as readExodusMesh for a bad file.
 struct ExodusMeshSize {

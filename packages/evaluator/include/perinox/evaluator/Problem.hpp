@@ -147,6 +147,7 @@ struct ParticleFileSpec {
   std::string path;
   int dim = 2;
   double horizon = 0.0, dx = 0.0, thickness = 1.0;
+  ParticleColumns columns = ParticleColumns::VolumeThenBlock;
 };
 
 /// The same on this rank's share of a particle file (collective): each rank reads the lines that
