@@ -200,13 +200,6 @@ namespace {
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) { throw std::runtime_error(path + ": " + what); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
-
 /// An open Exodus file, closed on every way out.
 struct ExodusFile {
   int id = -1;
@@ -406,11 +399,11 @@ Measure elementMeasure(const std::string& path, const std::string& element, cons
       m.centroid = x[0];
       m.volume = sphereVolume;
       if (!(m.volume > 0) || !std::isfinite(m.volume))
-        fail(path, element + " is a sphere with volume " + num(m.volume) + " (its second attribute must be positive)");
+        fail(path, element + " is a sphere with volume " + messageNumber(m.volume) + " (its second attribute must be positive)");
       m.ok = true;
   }
   if (m.ok && m.volume < kSmallestVolume)
-    fail(path, element + " ('" + type + "') has volume " + num(m.volume) + ", below " + num(kSmallestVolume) +
+    fail(path, element + " ('" + type + "') has volume " + messageNumber(m.volume) + ", below " + messageNumber(kSmallestVolume) +
                    " (products of two volumes would underflow)");
   if (!m.ok) {
     if (m.volume == 0) fail(path, element + " ('" + type + "') has zero volume (degenerate: coincident or flat corners)");

@@ -1,6 +1,7 @@
 // Regular particle lattices: real particles at the cell centres of a box, optional holes,
 // fictitious (Dirichlet) layers outside chosen sides, optional deterministic jitter.
 #include "perinox/core/Discretization.hpp"
+#include "perinox/core/InputFile.hpp"
 
 #include <algorithm>
 #include <climits>
@@ -18,13 +19,6 @@ constexpr char kAxisName[3] = {'x', 'y', 'z'};
 
 [[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
-
 /// Checks the scalar parameters of the spec and returns the common spacing dx.
 double validateAndSpacing(const LatticeSpec& spec) {
   if (spec.dim < 1 || spec.dim > 3)
@@ -37,17 +31,17 @@ double validateAndSpacing(const LatticeSpec& spec) {
     if (!std::isfinite(spec.lower[a]) || !std::isfinite(spec.upper[a]) ||
         !(spec.upper[a] > spec.lower[a]))
       fail(std::string("lattice box is empty or not finite along ") + kAxisName[a] + ": lower = " +
-           num(spec.lower[a]) + ", upper = " + num(spec.upper[a]) + " (upper must exceed lower)");
+           messageNumber(spec.lower[a]) + ", upper = " + messageNumber(spec.upper[a]) + " (upper must exceed lower)");
   }
   if (!(spec.thickness > 0.0) || !std::isfinite(spec.thickness))
     fail("lattice thickness (2D) / cross-section area (1D) must be positive and finite (got " +
-         num(spec.thickness) + ")");
+         messageNumber(spec.thickness) + ")");
   if (!(spec.horizonFactor >= 1.0) || !std::isfinite(spec.horizonFactor))
-    fail("horizonFactor = " + num(spec.horizonFactor) +
+    fail("horizonFactor = " + messageNumber(spec.horizonFactor) +
          " is below 1: a horizon smaller than the lattice spacing leaves particles without "
          "neighbours");
   if (!(spec.jitter >= 0.0 && spec.jitter <= 1.0))
-    fail("lattice jitter must lie in [0, 1] (a fraction of the spacing; got " + num(spec.jitter) +
+    fail("lattice jitter must lie in [0, 1] (a fraction of the spacing; got " + messageNumber(spec.jitter) +
          ")");
 
   double d[3];
@@ -56,7 +50,7 @@ double validateAndSpacing(const LatticeSpec& spec) {
     if (std::abs(d[a] - d[0]) > 1e-9 * d[0]) {
       std::string msg = "lattice spacing differs between axes: ";
       for (int b = 0; b < dim; ++b)
-        msg += (b ? ", d" : "d") + std::string(1, kAxisName[b]) + " = " + num(d[b]);
+        msg += (b ? ", d" : "d") + std::string(1, kAxisName[b]) + " = " + messageNumber(d[b]);
       msg += "; adjust counts or box";
       fail(msg);
     }
@@ -70,7 +64,7 @@ double validateAndSpacing(const LatticeSpec& spec) {
   }
   for (const Hole& h : spec.holes) {
     if (h.kind == Hole::Kind::Circle && !(h.radius >= 0.0 && std::isfinite(h.radius)))
-      fail("hole radius must be non-negative and finite (got " + num(h.radius) + ")");
+      fail("hole radius must be non-negative and finite (got " + messageNumber(h.radius) + ")");
     if (h.kind == Hole::Kind::Rectangle &&
         !(h.halfWidths.minCoeff() >= 0.0 && h.halfWidths.allFinite()))
       fail("hole halfWidths must be non-negative and finite");

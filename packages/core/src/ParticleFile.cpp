@@ -33,23 +33,16 @@ bool parseDouble(const std::string& tok, double& out) {
 /// A token for a message: printable, cut to 40 characters.
 std::string shown(const std::string& tok) { return printable(tok); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
-
 /// d without particles, its scalars checked.
 Discretization emptyParticleSet(const std::string& path, int dim, double horizon, double dx, double thickness) {
   if (dim < 1 || dim > 3)
     fail(path, 0, "dimension must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
   if (!(horizon > 0.0) || !std::isfinite(horizon))
-    fail(path, 0, "horizon must be positive and finite (got " + num(horizon) + ")");
+    fail(path, 0, "horizon must be positive and finite (got " + messageNumber(horizon) + ")");
   if (!(dx > 0.0) || !std::isfinite(dx))
-    fail(path, 0, "nominal spacing dx must be positive and finite (got " + num(dx) + ")");
+    fail(path, 0, "nominal spacing dx must be positive and finite (got " + messageNumber(dx) + ")");
   if (!(thickness > 0.0) || !std::isfinite(thickness))
-    fail(path, 0, "thickness must be positive and finite (got " + num(thickness) + ")");
+    fail(path, 0, "thickness must be positive and finite (got " + messageNumber(thickness) + ")");
   Discretization d;
   d.dim = dim;
   d.dx = dx;
@@ -93,14 +86,14 @@ void parseLine(const std::string& path, long lineNo, std::string text, Discretiz
     fail(path, lineNo, std::string("expected 5 numbers ") + layout + " (Peridigm's text file), found " + std::to_string(n));
   if (n < 4) fail(path, lineNo, std::string("expected at least 4 numbers ") + layout + ", found " + std::to_string(n));
   const double volume = peridigm ? v[4] : v[3];
-  if (!(volume > 0.0)) fail(path, lineNo, "volume must be positive (got " + num(volume) + ")");
+  if (!(volume > 0.0)) fail(path, lineNo, "volume must be positive (got " + messageNumber(volume) + ")");
   if (volume < kSmallestVolume)
-    fail(path, lineNo, "volume " + num(volume) + " is below " + num(kSmallestVolume) + " (products of two volumes would underflow)");
+    fail(path, lineNo, "volume " + messageNumber(volume) + " is below " + messageNumber(kSmallestVolume) + " (products of two volumes would underflow)");
   int blk = 1;
   if (n == 5) {
     // Accept "2" and "2.0" but not "2.5": block ids are integers.
     const double b = peridigm ? v[3] : v[4];
-    if (b != std::floor(b) || b < 0 || b > INT_MAX) fail(path, lineNo, "block id must be an integer of 0 or more (got " + num(b) + ")");
+    if (b != std::floor(b) || b < 0 || b > INT_MAX) fail(path, lineNo, "block id must be an integer of 0 or more (got " + messageNumber(b) + ")");
     blk = static_cast<int>(b);
   }
   if (static_cast<long long>(d.X.size()) >= kMaxParticles)

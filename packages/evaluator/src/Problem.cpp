@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "perinox/core/InputFile.hpp"
 #include "perinox/evaluator/Problem.hpp"
 
 namespace perinox {
@@ -16,28 +17,22 @@ namespace {
 
 [[noreturn]] void refuse(const std::string& what) { throw std::invalid_argument("ProblemSpec: " + what); }
 
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 /// Every entry of v finite, and v of the expected size (any size when expected < 0).
 void finiteArray(const std::vector<double>& v, long long expected, const char* name, bool mayBeEmpty = false) {
   if (!(mayBeEmpty && v.empty()) && expected >= 0 && static_cast<long long>(v.size()) != expected)
     refuse(std::string(name) + " has " + std::to_string(v.size()) + " entries, not " + std::to_string(expected));
   for (std::size_t i = 0; i < v.size(); ++i)
-    if (!std::isfinite(v[i])) refuse(std::string(name) + "[" + std::to_string(i) + "] = " + number(v[i]) + " is not finite");
+    if (!std::isfinite(v[i])) refuse(std::string(name) + "[" + std::to_string(i) + "] = " + messageNumber(v[i]) + " is not finite");
 }
 
 void positive(double v, const char* name) {
-  if (!(v > 0) || !std::isfinite(v)) refuse(std::string(name) + " = " + number(v) + " must be a positive finite number");
+  if (!(v > 0) || !std::isfinite(v)) refuse(std::string(name) + " = " + messageNumber(v) + " must be a positive finite number");
 }
 
 void damageLaw(const DamageSpec& s, const std::string& name) {
   if (!(s.sMin > 0 && s.sMin < s.sCr) || !std::isfinite(s.sCr))
-    refuse(name + " needs 0 < sMin < sCr (sMin = " + number(s.sMin) + ", sCr = " + number(s.sCr) + ")");
-  if (!(s.beta > 0) || !std::isfinite(s.beta)) refuse(name + ".beta = " + number(s.beta) + " must be a positive finite number");
+    refuse(name + " needs 0 < sMin < sCr (sMin = " + messageNumber(s.sMin) + ", sCr = " + messageNumber(s.sCr) + ")");
+  if (!(s.beta > 0) || !std::isfinite(s.beta)) refuse(name + ".beta = " + messageNumber(s.beta) + " must be a positive finite number");
 }
 
 /// blocks: ids unique, every particle's block given, each block's constants valid.
@@ -50,16 +45,16 @@ void validateBlocks(const ProblemSpec& P) {
     if (b.material.dim != P.disc.dim)
       refuse(name + ".material.dim = " + std::to_string(b.material.dim) + " differs from disc.dim = " + std::to_string(P.disc.dim));
     if (!(b.material.E > 0) || !std::isfinite(b.material.E))
-      refuse(name + ".material.E = " + number(b.material.E) + " must be a positive finite number");
+      refuse(name + ".material.E = " + messageNumber(b.material.E) + " must be a positive finite number");
     if (!(b.material.nu > -1.0 && b.material.nu < 0.5))
-      refuse(name + ".material.nu = " + number(b.material.nu) + " must satisfy -1 < nu < 0.5");
+      refuse(name + ".material.nu = " + messageNumber(b.material.nu) + " must satisfy -1 < nu < 0.5");
     if (P.disc.dim == 2 && b.material.planar == PlanarMode::None)
       refuse(name + ".material.planar must be PlaneStrain or PlaneStress in 2D");
-    if (b.G && (!std::isfinite(*b.G) || *b.G < 0)) refuse(name + ".G = " + number(*b.G) + " must be finite and >= 0");
+    if (b.G && (!std::isfinite(*b.G) || *b.G < 0)) refuse(name + ".G = " + messageNumber(*b.G) + " must be finite and >= 0");
     if (b.G && *b.G > 0 && !P.stabilization)
-      refuse(name + ".G = " + number(*b.G) + " is given but stabilization is off; set stabilization = true");
+      refuse(name + ".G = " + messageNumber(*b.G) + " is given but stabilization is off; set stabilization = true");
     if (b.C != StabilizationSpec::kFromMaterial && (!std::isfinite(b.C) || b.C < 0))
-      refuse(name + ".C = " + number(b.C) + " must be finite and >= 0, or left at its default");
+      refuse(name + ".C = " + messageNumber(b.C) + " must be finite and >= 0, or left at its default");
     if (b.damage) {
       if (!P.damage) refuse(name + ".damage is given but damage is off; set damage = true");
       damageLaw(*b.damage, name + ".damage");
@@ -236,7 +231,7 @@ void validateProblem(const ProblemSpec& P) {
   positive(d.dx, "disc.dx");
   positive(d.thickness, "disc.thickness");
   if (!std::isfinite(d.horizon) || d.horizon < d.dx * (1 - 1e-12))
-    refuse("disc.horizon = " + number(d.horizon) + " must be finite and at least the spacing disc.dx = " + number(d.dx));
+    refuse("disc.horizon = " + messageNumber(d.horizon) + " must be finite and at least the spacing disc.dx = " + messageNumber(d.dx));
   if (static_cast<long long>(d.volume.size()) != n || static_cast<long long>(d.fictitious.size()) != n)
     refuse("disc.volume and disc.fictitious need one entry per particle (" + std::to_string(n) + ")");
   // Families are optional (the evaluator then finds those of each rank's particles itself); given,
@@ -247,11 +242,11 @@ void validateProblem(const ProblemSpec& P) {
   for (long long i = 0; i < n; ++i) {
     if (!d.X[i].allFinite()) refuse("disc.X[" + std::to_string(i) + "] is not finite");
     if (!(d.volume[i] > 0) || !std::isfinite(d.volume[i]))
-      refuse("disc.volume[" + std::to_string(i) + "] = " + number(d.volume[i]) + " must be a positive finite number");
+      refuse("disc.volume[" + std::to_string(i) + "] = " + messageNumber(d.volume[i]) + " must be a positive finite number");
   }
   positive(P.material.E, "material.E");
   if (!(P.material.nu > -1.0 && P.material.nu < 0.5))
-    refuse("material.nu = " + number(P.material.nu) + " must satisfy -1 < nu < 0.5");
+    refuse("material.nu = " + messageNumber(P.material.nu) + " must satisfy -1 < nu < 0.5");
   if (P.fixedMask.size() != static_cast<std::size_t>(n)) refuse("fixedMask needs one entry per particle (" + std::to_string(n) + ")");
   for (long long i = 0; i < n; ++i)
     if (P.fixedMask[i] >> D) refuse("fixedMask[" + std::to_string(i) + "] names a component beyond the dimension");
@@ -259,26 +254,26 @@ void validateProblem(const ProblemSpec& P) {
   finiteArray(P.bodyForce, n * D, "bodyForce");
   finiteArray(P.modulusScale, n, "modulusScale", true);
   for (double s : P.modulusScale)
-    if (!(s > 0)) refuse("modulusScale holds " + number(s) + "; every E_i / E must be positive");
+    if (!(s > 0)) refuse("modulusScale holds " + messageNumber(s) + "; every E_i / E must be positive");
   if (P.stabilization) {
-    if (!(P.stab.G >= 0) || !std::isfinite(P.stab.G)) refuse("stab.G = " + number(P.stab.G) + " must be finite and >= 0");
+    if (!(P.stab.G >= 0) || !std::isfinite(P.stab.G)) refuse("stab.G = " + messageNumber(P.stab.G) + " must be finite and >= 0");
     if (P.stab.C != StabilizationSpec::kFromMaterial && (!std::isfinite(P.stab.C) || P.stab.C < 0))
-      refuse("stab.C = " + number(P.stab.C) + " must be finite and >= 0, or left at its default (then micromodulusC of the material, horizon and thickness gives it)");
+      refuse("stab.C = " + messageNumber(P.stab.C) + " must be finite and >= 0, or left at its default (then micromodulusC of the material, horizon and thickness gives it)");
   }
   if (P.control && (!std::isfinite(P.controlSpec.C) || P.controlSpec.C < 0))
-    refuse("controlSpec.C = " + number(P.controlSpec.C) + " must be finite and >= 0");
+    refuse("controlSpec.C = " + messageNumber(P.controlSpec.C) + " must be finite and >= 0");
   if (P.damage) {
     const auto& s = P.damageSpec;
     if (!(s.sMin > 0 && s.sMin < s.sCr) || !std::isfinite(s.sCr))
-      refuse("damageSpec needs 0 < sMin < sCr (sMin = " + number(s.sMin) + ", sCr = " + number(s.sCr) + ")");
+      refuse("damageSpec needs 0 < sMin < sCr (sMin = " + messageNumber(s.sMin) + ", sCr = " + messageNumber(s.sCr) + ")");
     positive(s.beta, "damageSpec.beta");
   }
   if (!P.blocks.empty()) validateBlocks(P);
   if (P.stabilization) {  // the micromodulus derived from E, the horizon and the thickness must be a number
     auto finiteC = [&](const StabilizationSpec& st, const MaterialSpec& m, const std::string& whose) {
       if (!std::isfinite(st.C))
-        refuse("the stabilisation's micromodulus C of " + whose + " is not finite (Young's modulus " + number(m.E) +
-               " with the horizon " + number(P.disc.horizon) + "): the modulus is too large for these units");
+        refuse("the stabilisation's micromodulus C of " + whose + " is not finite (Young's modulus " + messageNumber(m.E) +
+               " with the horizon " + messageNumber(P.disc.horizon) + "): the modulus is too large for these units");
     };
     if (P.blocks.empty()) finiteC(P.stabilizationSpec(), P.material, "the material");
     for (const BlockSpec& b : P.blocks) finiteC(P.stabilizationSpec(b), b.material, "block " + std::to_string(b.id));

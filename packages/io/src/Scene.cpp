@@ -69,12 +69,7 @@ std::string orList(const std::vector<std::string>& v) {
   return s;
 }
 
-std::string number(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string number(double v) { return messageNumber(v); }
 
 /// One line, at most kMaxMessage characters: a message never grows with the user's input.
 std::string failMessage(const std::string& file, std::string msg) {

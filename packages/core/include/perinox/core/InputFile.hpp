@@ -3,6 +3,7 @@
 // be before it is opened, and the one number syntax of scenes and particle files.
 #include <filesystem>
 #include <stdexcept>
+#include <sstream>
 #include <string>
 #include <system_error>
 
@@ -28,6 +29,14 @@ inline void requireRegularFile(const std::string& path, const std::string& kind)
 /// character.
 inline bool decimalCharacters(const std::string& text) {
   return !text.empty() && text.find_first_not_of("+-.0123456789eE") == std::string::npos;
+}
+
+/// A number as messages show it: ten significant digits, shortest form ("0.1", "2e+11").
+inline std::string messageNumber(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
 }
 
 /// Text read from a file as a message may show it: bytes outside printable ASCII as \xNN, at
