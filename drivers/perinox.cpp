@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@
 #include "perinox/io/OutputFolder.hpp"
 #include "perinox/io/PeridigmDeck.hpp"
 #include "perinox/io/Scene.hpp"
+#include "perinox/solver/AutoLinearSolver.hpp"
 #include "perinox/model/Model.hpp"
 
 namespace {
@@ -219,6 +221,24 @@ nlohmann::json schemaJson(const Teuchos::ParameterList& list, const std::string&
   return out;
 }
 
+/// perinox check's estimate of the run's cost with its linear solver (estimateRun: rough power
+/// laws, docs/choosing-a-solver.md "Estimates"). Collective.
+std::string estimateLine(const perinox::Scene& scene, const perinox::ProblemSpec& P, const Teuchos::Comm<int>& comm) {
+  const perinox::SolverSettings& s = scene.solver;
+  if (s.method == "ADR") return "  estimate: ADR (no estimate; docs/performance.md, \"Implicit against explicit\")";
+  const perinox::SolverFeatures f = perinox::solverFeatures(comm, P, scene.inputFile.empty(), false, false);
+  const perinox::RunEstimate e = perinox::estimateRun(f, {s.linearSolverName, s.jacobian, s.forcingTerm, ""});
+  const long long steps = s.continuation == "Arc Length" ? s.arc.maxSteps : static_cast<long long>(s.loadSteps) *
+                                                                                   std::max<std::size_t>(1, s.loadPath.size());
+  std::ostringstream os;
+  os.precision(2);
+  os << "  estimate (rough, one core; docs/choosing-a-solver.md): peak memory about " << std::fixed << std::setprecision(0) << e.peakMiB
+     << " MiB, a Newton iteration about " << std::defaultfloat << std::setprecision(2) << e.secondsPerNewton << " s; "
+     << steps << (s.continuation == "Arc Length" ? " arc-length steps at most" : " load steps") << " at 2-6 iterations each: "
+     << std::setprecision(2) << 2.0 * steps * e.secondsPerNewton << " to " << 6.0 * steps * e.secondsPerNewton << " s";
+  return os.str();
+}
+
 /// `perinox check SCENE [--set ...]`: reads and validates the scene as `run` does (the mesh or
 /// particle file, regions, conditions, rigid-body modes, solver keys), prints what it holds, and
 /// solves nothing and writes nothing. Exit 0, or 2 with the sentence `run` would give.
@@ -256,6 +276,7 @@ int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Te
     for (int g : ids) n += P.owns(g);
     regions.emplace_back(name, sum(n));
   }
+  const std::string estimate = estimateLine(scene, P, *comm);  // collective
   if (comm->getRank() != 0) return 0;
   const long long particles = P.particleCount();
   std::cout << "perinox check: " << args[1] << " is a valid scene (nothing solved, nothing written)\n"
@@ -268,6 +289,7 @@ int checkScene(const std::vector<std::string>& args, const Teuchos::RCP<const Te
             << (P.blocks.empty() ? "" : ", " + std::to_string(P.blocks.size()) + " blocks") << "\n"
             << "  solver: " << scene.solver.method << ", " << scene.solver.continuation << ", linear solver "
             << linearSolverPhrase(scene.solver) << "\n"
+            << estimate << "\n"
             << "  regions (particles):";
   for (const auto& [name, n] : regions) std::cout << " '" << name << "' " << n << ";";
   std::cout << "\n";

@@ -4,7 +4,7 @@
 - every scene of xml/ (and xml/hard/) gets a choice the scene accepts: `perinox check` with auto
   is valid and names the choice and its reason;
 - runs say the choice in their first line and in summary.json ("linear_solver_auto"), and the
-  choice is the one the measurements call for (docs/solver-choice.md): a small short-horizon
+  choice is the one the measurements call for (docs/choosing-a-solver.md): a small short-horizon
   lattice gets KLU2, a large stabilised block the matrix-free scalable solver, a small damaged
   plate GMRES on a kept MUMPS factorisation, a Jacobian the scene gives is kept;
 - an explicit preset overrides auto (no "linear_solver_auto" in summary.json).

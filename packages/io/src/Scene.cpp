@@ -549,7 +549,7 @@ void solverSchema(ParameterList& so) {
              {"Arc Length", "pseudo-arc-length continuation through limit points; see the Arc Length sublist"}});
   arcLengthSchema(so.sublist("Arc Length", false, "pseudo-arc-length continuation (Solver/Continuation = Arc Length): Riks normal-plane corrector with a bordering solve; arc length measured as sqrt(w |dx|^2 + dlambda^2) with w = 1 / |dx/dlambda|^2 at the start, so an arc length s first advances the load factor by about s / sqrt 2"));
   so.set("Linear Solver Preset", "auto", "'auto' (perinox chooses the preset, Jacobian and forcing term from the problem and says why: "
-         "docs/solver-choice.md), the name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
+         "docs/choosing-a-solver.md), the name of a preset in xml/solvers (the file name without .xml; no path), or 'custom'");
   so.sublist("Linear Solver", false, "Stratimikos parameters (used when the preset is 'custom')");
   setChoice(so, "Jacobian", "Preset",
             {{"Assembled", "sparse matrix"}, {"Matrix-Free", "analytic J v from the linearised kernels; nothing assembled"},

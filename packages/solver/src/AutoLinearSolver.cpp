@@ -4,6 +4,7 @@
 #include <Teuchos_Comm.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "perinox/evaluator/Problem.hpp"
@@ -11,6 +12,19 @@
 namespace perinox {
 
 namespace {
+
+/// peak = 75 MiB + a w^b MiB and one Newton iteration = c w^d s, with w = particles x (bonds + 1):
+/// per kind of choice and dimension, fitted to docs/choosing-a-solver.md's table ("Estimates").
+struct Fit {
+  double a, b, c, d;
+};
+enum Kind { kDirect, kKept, kFree, kAssembled };
+constexpr Fit kFits[2][4] = {
+    // 2D (and 1D): direct, kept factorisation, matrix-free, assembled
+    {{1e-4, 1.1, 2e-7, 1.2}, {1e-4, 1.1, 1e-7, 1.1}, {1e-4, 1.0, 2e-6, 1.0}, {1e-4, 1.0, 2e-6, 1.0}},
+    // 3D
+    {{1e-4, 1.2, 2e-7, 1.4}, {1e-4, 1.2, 1e-7, 1.3}, {1e-4, 1.0, 2e-6, 1.0}, {1e-4, 1.0, 2e-6, 1.0}},
+};
 
 std::string count(long long n) {
   char b[32];
@@ -44,7 +58,10 @@ LinearSolverChoice chooseLinearSolver(const SolverFeatures& f) {
   // rank) is fastest on a short-horizon lattice; it fills in fast with irregular particles and
   // long horizons.
   const long long smallLimit = f.dim == 1 ? (1LL << 62) : f.dim == 2 ? 2500 : 1000;
-  if (!matrixFree && f.ranks == 1 && (f.dim == 1 || (n <= smallLimit && f.lattice && f.horizonFactor <= 2.0)))
+  // Not with plasticity or damage in 2D and 3D: their tangents change every iteration, and the
+  // kept factorisation below is faster (xml/plastic_uniaxial_strain.xml: 0.30 s against 0.15 s).
+  const bool changing = f.plastic || f.damage;
+  if (!matrixFree && f.ranks == 1 && (f.dim == 1 || (n <= smallLimit && f.lattice && f.horizonFactor <= 2.0 && !changing)))
     return {"direct", "Assembled", "Constant",
             size + (f.dim == 1 ? ": a banded matrix" : " on a lattice with a short horizon") + ": a sparse direct solve (KLU2)" + because};
   // Where a direct solve beats the multigrid preconditioner, GMRES preconditioned by a kept MUMPS
@@ -70,10 +87,25 @@ LinearSolverChoice chooseLinearSolver(const SolverFeatures& f) {
           size + what + ": matrix-free GMRES with the two-stage multigrid preconditioner, Eisenstat-Walker forcing"};
 }
 
+RunEstimate estimateRun(const SolverFeatures& f, const LinearSolverChoice& c) {
+  // Bonds per particle on a lattice with this horizon factor (the ball's lattice sites), and the
+  // work measure w = particles x (bonds + 1) the fits below use.
+  const double h = f.horizonFactor, pi = 3.141592653589793;
+  const double bonds = f.dim == 1 ? 2 * h : f.dim == 2 ? pi * h * h : 4.0 / 3.0 * pi * h * h * h;
+  const double w = static_cast<double>(std::max<long long>(f.particles, 1)) * (bonds + 1.0);
+  const Kind kind = c.preset == "direct" || c.preset == "mumps" ? kDirect
+                    : c.preset == "gmres-mumps"                     ? kKept
+                    : c.jacobian != "Assembled"                     ? kFree
+                                                                    : kAssembled;
+  const Fit& fit = kFits[f.dim == 3 ? 1 : 0][kind];
+  return {75.0 + fit.a * std::pow(w, fit.b), fit.c * std::pow(w, fit.d)};
+}
+
 SolverFeatures solverFeatures(const Teuchos::Comm<int>& comm, const ProblemSpec& problem, bool lattice, bool mustAssemble,
                               bool explicitSolver) {
   SolverFeatures f;
   f.dim = problem.dim();
+  f.particles = problem.particleCount();
   f.freeDofs = problem.particleCount() * f.dim - prescribedDofCount(comm, problem);
   f.ranks = comm.getSize();
   f.lattice = lattice;

@@ -1,5 +1,5 @@
 // The automatic linear-solver choice (AutoLinearSolver.hpp): each case is a problem measured in
-// docs/performance.md or docs/solver-choice.md, with the choice those measurements call for.
+// docs/performance.md or docs/choosing-a-solver.md, with the choice those measurements call for.
 #include <gtest/gtest.h>
 
 #include "perinox/solver/AutoLinearSolver.hpp"
@@ -34,6 +34,9 @@ TEST(AutoChoice, SmallProblemsGetADirectSolve) {
   SolverFeatures beam = features(2, 250, 0.0);
   beam.horizonFactor = 1.015;
   expectChoice(chooseLinearSolver(beam), "direct", "Assembled", "Constant");  // KLU2 on a short-horizon lattice
+  beam.plastic = true;  // a tangent that changes every iteration: a kept MUMPS factorisation
+  expectChoice(chooseLinearSolver(beam), "gmres-mumps", "Matrix-Free", "Eisenstat-Walker");
+  beam.plastic = false;
   beam.ranks = 2;  // KLU2 is serial: a kept MUMPS factorisation on more ranks
   expectChoice(chooseLinearSolver(beam), "gmres-mumps", "Matrix-Free", "Eisenstat-Walker");
   SolverFeatures plate = features(2, 1200);  // a horizon of 3 spacings: KLU2 fills in, MUMPS does not

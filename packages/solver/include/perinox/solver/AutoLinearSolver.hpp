@@ -2,7 +2,7 @@
 // The linear solver a problem gets when its scene (or host program) leaves the choice to perinox:
 // Solver/Linear Solver Preset = auto, the default. A rule on what the problem is (dimension,
 // unknowns, ranks, effects, continuation), from the measurements in docs/performance.md ("Which
-// linear solver when") and docs/solver-choice.md (the table of every preset on every scene).
+// linear solver when") and docs/choosing-a-solver.md (the table of every preset on every scene).
 // Free of Trilinos types: a host program can ask for the choice without building anything.
 
 #include <string>
@@ -18,6 +18,7 @@ struct ProblemSpec;
 /// What the rule looks at.
 struct SolverFeatures {
   int dim = 2;
+  long long particles = 0;       // the whole body's, fictitious ones included
   long long freeDofs = 0;        // unknowns after the prescribed components, whole body
   int ranks = 1;
   bool lattice = true;           // particles on a regular lattice (else a mesh or a particle file)
@@ -43,6 +44,16 @@ struct LinearSolverChoice {
 
 /// The rule (deterministic; the same on every rank given the same features).
 LinearSolverChoice chooseLinearSolver(const SolverFeatures& f);
+
+/// What a run with a choice costs, roughly: the peak resident memory of one rank's process (on
+/// one rank) and the wall time of one Newton iteration on one core, from power laws in the
+/// particles times their family size fitted to the measurements of docs/choosing-a-solver.md
+/// ("Estimates"), which gives their spread against the measured runs.
+struct RunEstimate {
+  double peakMiB = 0;
+  double secondsPerNewton = 0;
+};
+RunEstimate estimateRun(const SolverFeatures& f, const LinearSolverChoice& c);
 
 /// A problem's features (collective over comm: the prescribed components are counted over the
 /// ranks). lattice, mustAssemble and explicitSolver come from the caller: the problem does not know
