@@ -20,6 +20,7 @@
 #include "perinox/evaluator/LowestRankMessage.hpp"
 #include "perinox/evaluator/Partitioner.hpp"
 #include "perinox/io/Output.hpp"
+#include "perinox/solver/MumpsSolver.hpp"
 
 namespace perinox {
 
@@ -505,6 +506,11 @@ void CheckpointWriter::accepted(const StepInfo& s) {
   if (!inputHash_) inputHash_ = comm_.getRank() == 0 ? inputFileHash(scene_) : std::string();
   if (!inputHash_->empty()) st["input_hash"] = *inputHash_;
   writeCheckpoint(folder_, st, ev_, s.x, stepper_.previous(), comm_);
+  // A run resumed from here starts without the MUMPS preconditioner's kept factors (gmres-mumps);
+  // dropping them here too makes this run factorise at the same set-up: both go on bit for bit.
+  if (auto wf = ev_.get_W_factory())
+    if (auto pf = wf->getPreconditionerFactory()) renewKeptFactors(*pf);
+  if (auto pf = ev_.preconditionerFactory()) renewKeptFactors(*pf);
   last_ = wallSeconds();
   if (comm_.getRank() == 0 && !options_.quiet)
     std::cout << "  checkpoint after step " << state.step << " in " << folder_.target << std::endl;

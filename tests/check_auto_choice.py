@@ -7,13 +7,15 @@
   choice is the one the measurements call for (docs/choosing-a-solver.md): a small short-horizon
   lattice gets KLU2, a large stabilised block the matrix-free scalable solver, a small damaged
   plate GMRES on a kept MUMPS factorisation, a Jacobian the scene gives is kept;
-- an explicit preset overrides auto (no "linear_solver_auto" in summary.json).
+- an explicit preset overrides auto (no "linear_solver_auto" in summary.json);
+- perinox check's estimate of the peak memory is within a factor of 3 of the run's.
 
     check_auto_choice.py PERINOX_EXE SOURCE_DIR OUT_DIR [--mpi MPIEXEC ARGS... --]
 """
 import glob
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -55,8 +57,6 @@ CASES = [
      ("gmres-mumps", "Matrix-Free", "Eisenstat-Walker")),
     ("explicit_preset", BLOCK, LARGE + ["Solver/Linear Solver Preset=gmres-ilu"], None),
 ]
-if mpi:  # KLU2 is serial: on more ranks a small lattice gets a kept MUMPS factorisation
-    CASES[0] = ("small_lattice", BLOCK, ["Solver/Linear Solver Preset=auto"], ("gmres-mumps", "Matrix-Free", "Eisenstat-Walker"))
 for name, scene, sets, expected in CASES:
     folder = os.path.join(out, name)
     args = ["run", scene, "--output", folder]
@@ -91,6 +91,18 @@ for name, scene, sets, expected in CASES:
     if phrase not in first:
         failures.append(f"{name}: the first line does not give the choice and its reason: {first!r}")
     print(f"{name}: {got} ({auto['reason']})")
+    # perinox check's estimate of the peak memory (a rough power law, docs/choosing-a-solver.md,
+    # "Estimates") within a factor of 3 of the run's measured peak.
+    if not mpi:
+        check = perinox(*(["check", scene] + [x for s_ in sets for x in ("--set", s_)]))
+        m = re.search(r"peak memory about (\d+) MiB", check.stdout)
+        if not m:
+            failures.append(f"{name}: perinox check gives no memory estimate: {check.stdout.strip()[-200:]}")
+        else:
+            est, meas = float(m.group(1)), j["peak_rss_mib_max_rank"]
+            print(f"{name}: estimated peak {est:.0f} MiB, measured {meas:.0f} MiB")
+            if not meas / 3 <= est <= 3 * meas:
+                failures.append(f"{name}: perinox check estimated {est:.0f} MiB, the run's peak was {meas:.0f} MiB (more than 3x apart)")
 
 if failures:
     print("\n".join("FAILED: " + f for f in failures))

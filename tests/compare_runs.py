@@ -40,6 +40,8 @@ def main():
     ap.add_argument("--same-damage", action="store_true",
                     help="also require the same bonds broken in every step and the same damage index "
                          "of every particle (fields.csv, to 1e-12)")
+    ap.add_argument("--fewer-krylov", action="store_true",
+                    help="each run after the first took fewer Krylov iterations in all than the first")
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     ref = load(a.dirs[0])
@@ -90,6 +92,12 @@ def main():
                 print(f"FAILED: the damage index of some particle differs in {d}")
                 sys.exit(1)
             print(f"{d}: {sum(broken)} bonds broken in the same steps, damage index equal at {len(mine)} particles")
+        if a.fewer_krylov:
+            k0, k1 = ref.get("krylov_iterations_total", 0), s.get("krylov_iterations_total", 0)
+            print(f"Krylov iterations: {k0} and {k1}")
+            if not k1 < k0:
+                print(f"FAILED: {d} did not take fewer Krylov iterations than {a.dirs[0]}")
+                sys.exit(1)
         print(f"{d}: ranks {s['ranks']}, partition {s.get('partition', {}).get('method')}")
     print(f"largest relative difference {worst:.3e} (tolerance {a.rtol})")
     if worst > a.rtol:

@@ -663,4 +663,18 @@ MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::Precond
   return {};
 }
 
+void MumpsPreconditionerFactory::renewFactors() const {
+  State& st = *state_;
+  st.context.reset();
+  st.primary.reset();
+  st.fallback.reset();
+  st.sinceFactor = 0;
+  st.excess = 0;
+  st.factoredThisSetup = false;
+}
+
+void renewKeptFactors(const Thyra::PreconditionerFactoryBase<double>& factory) {
+  if (auto* f = dynamic_cast<const MumpsPreconditionerFactory*>(&factory)) f->renewFactors();
+}
+
 }  // namespace perinox

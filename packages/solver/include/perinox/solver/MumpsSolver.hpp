@@ -99,6 +99,9 @@ class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<doubl
   std::string description() const override;
 
   MumpsPreconditionerStatistics statistics() const;
+  /// Drops the kept factors (and MUMPS's analysis): the next set-up factorises afresh, as a run
+  /// resumed from a checkpoint does, so the two take the same path bit for bit.
+  void renewFactors() const;
 
  private:
   struct State;
@@ -111,5 +114,7 @@ class MumpsPreconditionerFactory : public Thyra::PreconditionerFactoryBase<doubl
 
 /// The statistics of a MumpsPreconditionerFactory (zeros for another factory).
 MumpsPreconditionerStatistics mumpsPreconditionerStatistics(const Thyra::PreconditionerFactoryBase<double>& factory);
+/// renewFactors of a MumpsPreconditionerFactory (nothing for another factory).
+void renewKeptFactors(const Thyra::PreconditionerFactoryBase<double>& factory);
 
 }  // namespace perinox
