@@ -33,6 +33,8 @@ CONFIGS = {
     "auto": ["Solver/Linear Solver Preset=auto"],
     "scalable+mf+ew": ["Solver/Linear Solver Preset=scalable", "Solver/Jacobian=Matrix-Free",
                        "Solver/Forcing Term=Eisenstat-Walker"],
+    "scalable-weak+mf+ew": ["Solver/Linear Solver Preset=scalable-weak", "Solver/Jacobian=Matrix-Free",
+                            "Solver/Forcing Term=Eisenstat-Walker"],
     "scalable+mf": ["Solver/Linear Solver Preset=scalable", "Solver/Jacobian=Matrix-Free", "Solver/Forcing Term=Constant"],
     "scalable": ["Solver/Linear Solver Preset=scalable", "Solver/Jacobian=Assembled", "Solver/Forcing Term=Constant"],
     "mumps": ["Solver/Linear Solver Preset=mumps", "Solver/Jacobian=Assembled", "Solver/Forcing Term=Constant"],
@@ -52,7 +54,7 @@ CONFIGS = {
     "jfnk-ilu": ["Solver/Linear Solver Preset=jfnk-ilu", "Solver/Jacobian=Preset", "Solver/Forcing Term=Constant"],
 }
 # The (preset, Jacobian, forcing term) each choice runs, to tell when auto made the same choice.
-SAME = {"scalable+mf+ew": "scalable/Matrix-Free/Eisenstat-Walker", "scalable+mf": "scalable/Matrix-Free/Constant",
+SAME = {"scalable+mf+ew": "scalable/Matrix-Free/Eisenstat-Walker", "scalable-weak+mf+ew": "scalable-weak/Matrix-Free/Eisenstat-Walker", "scalable+mf": "scalable/Matrix-Free/Constant",
         "scalable": "scalable/Assembled/Constant", "mumps": "mumps/Assembled/Constant", "direct": "direct/Assembled/Constant",
         "gmres-mumps+mf": "gmres-mumps/Matrix-Free/Eisenstat-Walker", "gmres-mumps": "gmres-mumps/Assembled/Eisenstat-Walker",
         "gmres-ilu": "gmres-ilu/Assembled/Constant", "gmres-ilu0": "gmres-ilu0/Assembled/Constant",
