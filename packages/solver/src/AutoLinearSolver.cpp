@@ -14,16 +14,17 @@ namespace perinox {
 namespace {
 
 /// peak = 75 MiB + a w^b MiB and one Newton iteration = c w^d s, with w = particles x (bonds + 1):
-/// per kind of choice and dimension, fitted to docs/choosing-a-solver.md's table ("Estimates").
+/// per kind of choice and dimension, fitted to the runs of docs/choosing-a-solver.md's table ("Estimates").
 struct Fit {
   double a, b, c, d;
 };
 enum Kind { kDirect, kKept, kFree, kAssembled };
 constexpr Fit kFits[2][4] = {
+    // tools/fit_estimates.py over tools/bench_auto.py's runs (docs/choosing-a-solver.md, "Estimates")
     // 2D (and 1D): direct, kept factorisation, matrix-free, assembled
-    {{1e-4, 1.1, 2e-7, 1.2}, {1e-4, 1.1, 1e-7, 1.1}, {1e-4, 1.0, 2e-6, 1.0}, {1e-4, 1.0, 2e-6, 1.0}},
-    // 3D
-    {{1e-4, 1.2, 2e-7, 1.4}, {1e-4, 1.2, 1e-7, 1.3}, {1e-4, 1.0, 2e-6, 1.0}, {1e-4, 1.0, 2e-6, 1.0}},
+    {{5.42e-05, 1.26, 7.49e-09, 1.57}, {0.000203, 1.13, 7.86e-09, 1.42}, {0.000507, 0.898, 7.19e-05, 0.699}, {0.00153, 0.873, 3.77e-05, 0.785}},
+    // 3D (2D's exponents; coefficients through the 3D runs)
+    {{0.000716, 1.26, 2.64e-07, 1.57}, {0.000572, 1.13, 4.42e-08, 1.42}, {0.00176, 0.898, 0.000236, 0.699}, {0.0047, 0.873, 0.000259, 0.785}},
 };
 
 std::string count(long long n) {
