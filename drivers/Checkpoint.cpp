@@ -477,6 +477,13 @@ Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long 
   return c;
 }
 
+void forPreconditionerFactories(const PeridynamicEvaluator& ev,
+                                const std::function<void(const Thyra::PreconditionerFactoryBase<double>&)>& f) {
+  if (auto wf = ev.get_W_factory())
+    if (auto pf = wf->getPreconditionerFactory()) f(*pf);
+  if (auto pf = ev.preconditionerFactory()) f(*pf);
+}
+
 void CheckpointWriter::accepted(const StepInfo& s) {
   const auto& state = stepper_.state();
   int due = (options_.checkpointSteps > 0 && state.step % options_.checkpointSteps == 0) ||
@@ -508,9 +515,7 @@ void CheckpointWriter::accepted(const StepInfo& s) {
   writeCheckpoint(folder_, st, ev_, s.x, stepper_.previous(), comm_);
   // A run resumed from here starts without the MUMPS preconditioner's kept factors (gmres-mumps);
   // dropping them here too makes this run factorise at the same set-up: both go on bit for bit.
-  if (auto wf = ev_.get_W_factory())
-    if (auto pf = wf->getPreconditionerFactory()) renewKeptFactors(*pf);
-  if (auto pf = ev_.preconditionerFactory()) renewKeptFactors(*pf);
+  forPreconditionerFactories(ev_, [](const Thyra::PreconditionerFactoryBase<double>& pf) { renewKeptFactors(pf); });
   last_ = wallSeconds();
   if (comm_.getRank() == 0 && !options_.quiet)
     std::cout << "  checkpoint after step " << state.step << " in " << folder_.target << std::endl;

@@ -4,6 +4,7 @@
 #include <Teuchos_Comm.hpp>
 #include <Thyra_VectorBase.hpp>
 #include <nlohmann/json.hpp>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -53,6 +54,11 @@ void writeCheckpoint(const FolderPlan& plan, const nlohmann::json& state, const 
 /// every particle this rank owns (owned, sorted global ids) must then receive its state.
 Checkpoint readCheckpoint(const std::string& dir, const Scene& scene, long long freeDofs, long long particles,
                           int stateDoubles, const std::vector<long long>& owned, const Teuchos::Comm<int>& comm);
+
+/// Calls f with each preconditioner factory of the evaluator's linear solver: the W factory's
+/// (assembled Jacobian) and the evaluator's own (matrix-free and Jacobian-free runs).
+void forPreconditionerFactories(const PeridynamicEvaluator& ev,
+                                const std::function<void(const Thyra::PreconditionerFactoryBase<double>&)>& f);
 
 /// Checkpoints after accepted steps, every --checkpoint-steps steps and/or --checkpoint-seconds.
 class CheckpointWriter final : public StepObserver {

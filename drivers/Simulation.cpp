@@ -426,15 +426,10 @@ RunFacts runFacts(const PeridynamicEvaluator& evaluator, const Thyra::VectorBase
                   const std::optional<Checkpoint>& resume, const RunOptions& options) {
   RunFacts facts;
   facts.residualSeconds = residualSeconds(evaluator, x);
-  if (auto wf = evaluator.get_W_factory())
-    if (auto pf = wf->getPreconditionerFactory()) {
-      facts.twoStage = twoStageStatistics(*pf);
-      facts.mumps = mumpsPreconditionerStatistics(*pf);
-    }
-  if (auto pf = evaluator.preconditionerFactory()) {
-    facts.twoStage = twoStageStatistics(*pf);
-    facts.mumps = mumpsPreconditionerStatistics(*pf);
-  }
+  forPreconditionerFactories(evaluator, [&](const Thyra::PreconditionerFactoryBase<double>& pf) {
+    facts.twoStage = twoStageStatistics(pf);
+    facts.mumps = mumpsPreconditionerStatistics(pf);
+  });
   measureFootprint(evaluator, *evaluator.comm(), facts);
   facts.ranks = evaluator.comm()->getSize();
   facts.segment = solved.segment;

@@ -231,7 +231,6 @@ std::string estimateLine(const perinox::Scene& scene, const perinox::ProblemSpec
   const long long steps = s.continuation == "Arc Length" ? s.arc.maxSteps : static_cast<long long>(s.loadSteps) *
                                                                                    std::max<std::size_t>(1, s.loadPath.size());
   std::ostringstream os;
-  os.precision(2);
   os << "  estimate (rough, one core; docs/choosing-a-solver.md): peak memory about " << std::fixed << std::setprecision(0) << e.peakMiB
      << " MiB, a Newton iteration about " << std::defaultfloat << std::setprecision(2) << e.secondsPerNewton << " s; "
      << steps << (s.continuation == "Arc Length" ? " arc-length steps at most" : " load steps") << " at 2-6 iterations each: "
